@@ -1,0 +1,1 @@
+"""Controllers: one module per ``controller=`` option, shared pieces in :mod:`.base`."""

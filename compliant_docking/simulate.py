@@ -1,0 +1,301 @@
+"""The simulation: build everything for a config, then the loop
+
+    read state → reference → measured wrench → torque → clip → mj_step → record.
+
+:func:`prepare` builds the scene, the Pinocchio arm, the start posture, the planner and
+the controller (heavy objects are made here, inside the job, never at import time).
+:meth:`Simulation.run` runs the loop and returns the :class:`Telemetry`; it stops early,
+raising :class:`Diverged`, if the physics blows up.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from dataclasses import dataclass, field
+
+import mujoco
+import numpy as np
+import pinocchio as pin
+from hydra.utils import instantiate
+from omegaconf import DictConfig
+
+from compliant_docking.controllers.base import ControlContext, Controller
+from compliant_docking.scene import Scene, build_scene
+from compliant_docking.telemetry import Telemetry
+from compliant_docking.trajectories.base import Reference, ReferenceTable, Trajectory, Waypoints
+
+#: joint speed regarded as an exploding state [rad/s]
+EXPLODING_SPEED = 100.0
+#: steps between divergence checks
+CHECK_EVERY = 50
+#: what the log copies from MuJoCo each step, in this order
+STATE_LOGGED = int(mujoco.mjtState.mjSTATE_QPOS | mujoco.mjtState.mjSTATE_QVEL
+                   | mujoco.mjtState.mjSTATE_CTRL)
+
+
+class Diverged(RuntimeError):
+    """The physics became non-finite or exploded; the message says when and why."""
+
+
+@dataclass
+class Simulation:
+    cfg: DictConfig
+    scene: Scene
+    data: mujoco.MjData
+    q0: np.ndarray
+    waypoints: Waypoints
+    trajectory: Trajectory
+    controller: Controller
+    duration: float
+    n_steps: int
+    telemetry: Telemetry
+    loop_wall_time: float = 0.0
+    notes: list[str] = field(default_factory=list)
+    reference: ReferenceTable | None = None  # the planner's table, made by run()
+
+    @property
+    def complete(self) -> bool:
+        """Whether the run covers the whole planned trajectory."""
+        return self.telemetry.count * self.scene.model.opt.timestep >= self.trajectory.duration - 1e-9
+
+    def run(self, progress: bool = False) -> Telemetry:
+        """Simulate ``n_steps`` steps; raises :class:`Diverged` when the physics blows up.
+
+        The torque clip is MuJoCo's actuator ``ctrlrange`` (set to ±robot.max_torque by the
+        scene), so the loop writes the command and the log keeps it; the applied torque
+        and the saturation flag follow from it after the loop.
+        """
+        model, data, arm = self.scene.model, self.data, self.scene.arm
+        log = self.telemetry
+        dt = model.opt.timestep
+        wrench = np.zeros(6)
+        read_wrench = _wrench_reader(self.scene, data, wrench)
+        qpos, qvel, ctrl = data.qpos, data.qvel, data.ctrl
+        log_state, log_w, log_contacts = log.state, log.wrench, log.contacts
+        get_state, state_spec = mujoco.mj_getState, STATE_LOGGED
+        bad_qacc = data.warning[mujoco.mjtWarning.mjWARN_BADQACC]
+        reporter = _Progress(self.n_steps, dt, enabled=progress)
+        mj_step, update, compute = mujoco.mj_step, arm.update, self.controller.compute
+        start = time.perf_counter()
+        # The planner's work is part of the loop's time: its table of every step first.
+        self.reference = self.trajectory.table(np.arange(self.n_steps) * dt)
+        row, ref = self.reference.row, Reference()
+        for k in range(self.n_steps):
+            t = k * dt
+            update(qpos, qvel)
+            row(k, ref)
+            read_wrench()
+            tau = compute(t, ref, wrench)
+            ctrl[:] = tau
+            get_state(model, data, log_state[k], state_spec)  # [q, v, command]
+            log_w[k] = wrench
+            log_contacts[k] = data.ncon
+            mj_step(model, data)
+            if k % CHECK_EVERY == 0:
+                log.count = k + 1
+                if bad_qacc.number or not np.isfinite(qvel).all() or \
+                        np.abs(qvel).max() > EXPLODING_SPEED or not np.isfinite(tau).all():
+                    raise Diverged(_divergence_reason(t, qvel, tau, bad_qacc.number))
+                reporter.update(k)
+        log.count = self.n_steps
+        self.loop_wall_time = time.perf_counter() - start
+        reporter.done()
+        return log
+
+
+def _divergence_reason(t: float, qvel: np.ndarray, tau: np.ndarray, bad_qacc: int) -> str:
+    if not np.isfinite(tau).all():
+        what = "the controller returned a non-finite torque"
+    elif bad_qacc:
+        what = "MuJoCo reported a non-finite or huge joint acceleration"
+    elif not np.isfinite(qvel).all():
+        what = "joint velocities became non-finite"
+    else:
+        what = f"a joint speed reached {np.abs(qvel).max():.3g} rad/s (limit {EXPLODING_SPEED:g})"
+    return f"simulation diverged at t = {t:.3f} s: {what}"
+
+
+def _wrench_reader(scene: Scene, data: mujoco.MjData, out: np.ndarray):
+    """A function writing into ``out`` the tool's external wrench [f; m] at the TCP, world axes.
+
+    MuJoCo's force/torque sensors give what the tool subtree exerts on its parent about
+    the sensor site, in the site frame: minus the external wrench (minus the tool's
+    weight). A constant 6×6 map moves the moment to the TCP and flips the sign in the
+    site frame; one rotation takes both halves to the world. The values come from the
+    previous mj_step: a one-step measurement delay, as on a real robot.
+    """
+    raw = data.sensordata[scene.force_adr:scene.force_adr + 6]  # [force; torque], a view
+    site_rot_T = data.site_xmat[scene.sensor_site].reshape(3, 3).T  # a view, tracks the data
+    tool = scene.arm.tool
+    # TCP → sensor offset in the sensor frame; moment about the TCP = m_s + r × f
+    r = -(tool.sensor.actInv(tool.tcp)).translation
+    to_tcp = -np.block([[np.eye(3), np.zeros((3, 3))], [pin.skew(r), np.eye(3)]])
+    local = np.zeros((2, 3))  # the wrench at the TCP in sensor axes, rows [f; m]
+    local_flat = local.reshape(6)
+    out_rows = out.reshape(2, 3)  # a view of out
+    weight = tool.mass * scene.gravity
+    has_weight = bool(np.any(weight))
+    tcp_pos = data.site_xpos[scene.tcp_site]
+    body_rot = data.xmat[scene.tool_body].reshape(3, 3)
+    body_pos = data.xpos[scene.tool_body]
+
+    def read() -> None:
+        # ndarray.dot: a fraction of the call overhead of `@` on arrays this small
+        to_tcp.dot(raw, out=local_flat)
+        local.dot(site_rot_T, out=out_rows)  # each row rotated to world axes
+        if has_weight:  # payload compensation, as on a real F/T sensor
+            out[:3] -= weight
+            out[3:] -= _cross(body_pos + body_rot.dot(tool.com) - tcp_pos, weight)
+
+    return read
+
+
+class _Progress:
+    """A light progress indicator on stderr (one update per simulated second)."""
+
+    def __init__(self, n_steps: int, dt: float, enabled: bool):
+        self.enabled = enabled
+        self.n_steps, self.dt = n_steps, dt
+        self.every = max(int(round(1.0 / dt)), 1)
+        self.tty = sys.stderr.isatty()
+        self.start = time.perf_counter()
+
+    def update(self, k: int) -> None:
+        if not self.enabled or k % self.every or not self.tty:
+            return
+        elapsed = time.perf_counter() - self.start
+        sys.stderr.write(f"\r  simulating {k * self.dt:6.1f} / {self.n_steps * self.dt:.1f} s"
+                         f"  ({k * self.dt / max(elapsed, 1e-9):5.1f}× real time)")
+        sys.stderr.flush()
+
+    def done(self) -> None:
+        if self.enabled and self.tty:
+            sys.stderr.write("\r" + " " * 60 + "\r")
+            sys.stderr.flush()
+
+
+def task_waypoints(cfg: DictConfig, scene: Scene) -> Waypoints:
+    """Start and goal TCP poses and the docking axis, from the socket pose the planner believes.
+
+    Without ``task.init_quat`` the plug points along the socket axis into the socket;
+    its roll about that axis (free: the interface is axisymmetric) is the roll of the TCP
+    at ``robot.ik_guess``, so the start posture needs no wrist turn.
+    """
+    task = cfg.task
+    stroke = np.asarray(task.stroke, dtype=float)
+    length = float(np.linalg.norm(stroke))
+    guess = scene.arm.tcp_placement(np.asarray(cfg.robot.ik_guess, dtype=float)).rotation
+    if scene.socket is None:
+        if task.init_pos is None:
+            raise ValueError("task.init_pos must be set when there is no target (target=none): "
+                             "the start pose cannot be derived from a socket")
+        rot = (_quat_matrix(task.init_quat, "task.init_quat") if task.init_quat is not None
+               else _with_axis(guess, np.array([0.0, 0.0, -1.0])))  # plug pointing down
+        axis = stroke / length if length > 0 else rot[:, 2]
+        return Waypoints(start=pin.SE3(rot, np.asarray(task.init_pos, float)), goal=None, axis=axis)
+
+    if not length > 0.0:
+        raise ValueError(f"task.stroke must be a non-zero vector, got {list(stroke)}")
+    axis = stroke / length
+    seat = scene.socket.believed
+    if task.init_pos is None:
+        start_pos = seat.translation - stroke
+    else:
+        start_pos = np.asarray(task.init_pos, dtype=float)
+    rot = (_with_axis(guess, -seat.rotation[:, 2]) if task.init_quat is None
+           else _quat_matrix(task.init_quat, "task.init_quat"))
+    goal_pos = start_pos + stroke + float(task.insertion_overshoot) * axis
+    return Waypoints(start=pin.SE3(rot, start_pos), goal=pin.SE3(rot, goal_pos), axis=axis)
+
+
+def _with_axis(rot: np.ndarray, z_axis: np.ndarray) -> np.ndarray:
+    """The rotation whose z axis is ``z_axis``, closest in roll to ``rot``."""
+    z = z_axis / np.linalg.norm(z_axis)
+    x = rot[:, 0] - (rot[:, 0] @ z) * z
+    if np.linalg.norm(x) < 1e-6:  # rot's x lies along z: use its y for the roll instead
+        x = np.cross(rot[:, 1] - (rot[:, 1] @ z) * z, z)
+    x /= np.linalg.norm(x)
+    return np.column_stack([x, np.cross(z, x), z])
+
+
+def _quat_matrix(quat, setting: str) -> np.ndarray:
+    q = np.asarray(quat, dtype=float)
+    if q.shape != (4,) or not np.isfinite(q).all() or abs(np.linalg.norm(q) - 1.0) > 1e-6:
+        raise ValueError(f"{setting} must be a unit quaternion [w, x, y, z], got {list(quat)}")
+    return pin.Quaternion(q[0], q[1], q[2], q[3]).matrix()
+
+
+def run_duration(cfg: DictConfig, trajectory: Trajectory) -> tuple[float, list[str]]:
+    """The run length: task.duration if set, else the planner's duration + settle_time."""
+    notes = []
+    if cfg.task.duration is None:
+        return trajectory.duration + float(cfg.task.settle_time), notes
+    duration = float(cfg.task.duration)
+    if not duration > 0.0:
+        raise ValueError(f"task.duration must be > 0 s (or null to follow the trajectory), got {duration}")
+    if duration < trajectory.duration:
+        notes.append(f"task.duration = {duration:g} s is shorter than the trajectory "
+                     f"({trajectory.duration:.3g} s): the run is incomplete")
+    return duration, notes
+
+
+def prepare(cfg: DictConfig) -> Simulation:
+    """Build scene, arm, start posture, planner and controller for ``cfg``."""
+    scene = build_scene(cfg)
+    model, arm = scene.model, scene.arm
+    nv = model.nv
+    for key in ("velocity_limits", "torque_limits", "max_torque", "ik_guess"):
+        if len(cfg.robot[key]) != nv:
+            raise ValueError(f"robot.{key} has {len(cfg.robot[key])} values; "
+                             f"robot {cfg.robot.name} has {nv} joints")
+    if np.any(np.asarray(cfg.robot.max_torque, float) <= 0.0):
+        raise ValueError(f"robot.max_torque must be > 0 for every joint, got {list(cfg.robot.max_torque)}")
+
+    waypoints = task_waypoints(cfg, scene)
+    # _partial_: the config's parameters are bound first, the run-time objects passed
+    # directly (instantiate would otherwise turn dataclass arguments into dicts)
+    trajectory = instantiate(cfg.trajectory, _partial_=True, _convert_="all")(waypoints=waypoints)
+    duration, notes = run_duration(cfg, trajectory)
+    ref = Reference()
+    trajectory.sample(0.0, ref)
+    q0 = arm.solve_ik(pin.SE3(ref.rot.copy(), ref.pos.copy()),
+                      np.asarray(cfg.robot.ik_guess, dtype=float))
+
+    data = mujoco.MjData(model)
+    data.qpos[:] = q0
+    data.qvel[:] = 0.0
+    mujoco.mj_forward(model, data)
+    n_steps = int(round(duration / model.opt.timestep))
+    context = ControlContext(
+        arm=arm, dt=float(model.opt.timestep), n_steps=n_steps, q_home=q0.copy(),
+        velocity_limits=np.asarray(cfg.robot.velocity_limits, dtype=float),
+        torque_limits=np.asarray(cfg.robot.max_torque, dtype=float),
+        joint_friction=model.dof_frictionloss.copy(), joint_damping=model.dof_damping.copy(),
+        axis=waypoints.axis)
+    controller = instantiate(cfg.controller, _partial_=True, _convert_="all")(context=context)
+    limits = context.torque_limits
+    model.actuator_ctrlrange[:] = np.column_stack([-limits, limits])  # the software clip
+    return Simulation(cfg=cfg, scene=scene, data=data, q0=q0, waypoints=waypoints,
+                      trajectory=trajectory, controller=controller, duration=duration,
+                      n_steps=n_steps, telemetry=Telemetry(n_steps, nv, model.opt.timestep),
+                      notes=notes)
+
+
+def replay_physics(sim: Simulation) -> float:
+    """Re-simulate the recorded torques with physics only; returns the loop's wall time [s].
+
+    Same start state, same torque sequence, hence the same contacts: the denominator of
+    the benchmark's loop/physics ratio.
+    """
+    model = sim.scene.model
+    data = mujoco.MjData(model)
+    data.qpos[:] = sim.q0
+    mujoco.mj_forward(model, data)
+    torques = sim.telemetry.tau_cmd[:sim.telemetry.count]
+    ctrl, mj_step = data.ctrl, mujoco.mj_step
+    start = time.perf_counter()
+    for tau in torques:
+        ctrl[:] = tau
+        mj_step(model, data)
+    return time.perf_counter() - start
