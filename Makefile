@@ -8,7 +8,7 @@ VENV   ?= .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: run test test-slow test-all benchmark setup clean
+.PHONY: run test test-slow test-all benchmark setup gl clean
 
 setup: $(STAMP)
 
@@ -19,17 +19,35 @@ $(STAMP): pyproject.toml
 	$(PY) -m pip install --quiet -e '.[test]'
 	touch $(STAMP)
 
-run: $(STAMP)
+run: $(STAMP) gl
 	$(PY) -m compliant_docking $(ARGS)
 
-test: $(STAMP)
+test: $(STAMP) gl
 	$(PY) -m pytest -q $(PYTEST_ARGS)
 
-test-slow: $(STAMP)
+test-slow: $(STAMP) gl
 	$(PY) -m pytest -q -m slow $(PYTEST_ARGS)
 
-test-all: $(STAMP)
+test-all: $(STAMP) gl
 	$(PY) -m pytest -q -m 'slow or not slow' $(PYTEST_ARGS)
+
+# Offscreen rendering (render=video) without a display needs EGL (or OSMesa) from the
+# system, not from pip: check that one loads; if not, install Debian's EGL packages
+# (listed in compliant_docking/gl.py) when running as root, else print the command
+# (docs/rendering.md).
+gl: $(STAMP)
+	@$(PY) compliant_docking/gl.py --quiet || { \
+	  pkgs="$$($(PY) compliant_docking/gl.py --packages)"; \
+	  if command -v apt-get >/dev/null 2>&1 && [ "$$(id -u)" = 0 ]; then \
+	    echo "installing headless OpenGL for videos (render=video): $$pkgs"; \
+	    export DEBIAN_FRONTEND=noninteractive; \
+	    apt-get update -qq && apt-get install -y -qq --no-install-recommends $$pkgs >/dev/null; \
+	  elif command -v apt-get >/dev/null 2>&1; then \
+	    echo "note: videos (render=video) need headless OpenGL; install it with:"; \
+	    echo "  sudo apt-get install -y $$pkgs"; \
+	  else \
+	    echo "note: videos (render=video) need headless OpenGL: install EGL (libEGL and Mesa) or OSMesa with your package manager"; \
+	  fi; }
 
 benchmark: $(STAMP)
 	$(PY) benchmarks/loop_speed.py $(ARGS)

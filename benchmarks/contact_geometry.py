@@ -293,8 +293,8 @@ CASES = (
 CONTACT_CANDIDATES = (
     ("DEFAULT", ContactParams()),
     ("stiffer solimp 0.99/0.999", ContactParams(solimp=(0.99, 0.999, 0.0005, 0.5, 2.0))),
-    ("dampratio 0.7", ContactParams(solref=(0.002, 0.7))),
-    ("timeconst 0.004", ContactParams(solref=(0.004, 1.0))),
+    ("dampratio 0.7", ContactParams(solref=(0.005, 0.7))),
+    ("timeconst 0.002", ContactParams(solref=(0.002, 1.0))),
     ("MuJoCo defaults", ContactParams(solref=(0.02, 1.0), solimp=(0.9, 0.95, 0.001, 0.5, 2.0))),
 )
 

@@ -10,6 +10,12 @@ proxsuite, matplotlib) are imported by the modules that need them, inside the jo
 
 from pathlib import Path
 
+from compliant_docking import gl as _gl
+
+# MuJoCo binds its OpenGL backend (MUJOCO_GL) when it is first imported: decide it here,
+# before any module of the package imports mujoco (compliant_docking/gl.py).
+_gl.configure()
+
 __version__ = "0.1.0"
 
 #: Repository root (the package is installed in editable mode from a checkout).

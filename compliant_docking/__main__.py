@@ -2,6 +2,8 @@
 
 Exit status: 0 the run succeeded (docked / tracking gate PASS), 1 the run failed
 (error or divergence), 3 the run finished but its gate did not pass.
+A sweep (``-m``): 1 if any job failed (or its worker died), else 0 — jobs that did not
+dock are results, counted in the summary (compliant_docking/sweep.py).
 """
 
 from __future__ import annotations
@@ -11,6 +13,7 @@ from pathlib import Path
 
 import hydra
 from hydra.core.hydra_config import HydraConfig
+from hydra.types import RunMode
 from omegaconf import DictConfig
 
 from compliant_docking import CONF_DIR
@@ -22,10 +25,12 @@ _records: list[dict] = []
 
 @hydra.main(version_base="1.3", config_path=str(CONF_DIR), config_name="config")
 def _main(cfg: DictConfig) -> None:
-    from compliant_docking.runner import execute, job_identity
+    from compliant_docking.runner import execute
 
-    out_dir = Path(HydraConfig.get().runtime.output_dir)
-    _records.append(execute(cfg, out_dir, identity=job_identity(cfg)))
+    hydra_cfg = HydraConfig.get()
+    out_dir = Path(hydra_cfg.runtime.output_dir)
+    # in a sweep, each job prints one progress line (sweep.SweepCallback), not its summary
+    _records.append(execute(cfg, out_dir, echo=hydra_cfg.mode != RunMode.MULTIRUN))
 
 
 def main() -> int:
@@ -34,7 +39,16 @@ def main() -> int:
 
         print_help(sys.argv[1:])
         return 0
-    _main()
+    from compliant_docking import sweep
+
+    sweep.reset()
+    try:
+        _main()
+    except (SystemExit, KeyboardInterrupt):
+        sweep.finish_aborted()  # a sweep cut short (worker crash, Ctrl-C): summarise it
+        raise
+    if sweep.last_outcome() is not None:  # the jobs ran in worker processes
+        return sweep.last_outcome().exit_status
     from compliant_docking.runner import exit_status
 
     return max((exit_status(r) for r in _records), default=0)

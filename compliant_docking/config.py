@@ -51,6 +51,21 @@ class ForceSource(Enum):
     observer = "observer"  # sensorless: the generalised-momentum observer
 
 
+class NullSpaceMetric(Enum):
+    """controller=hqp: the joint-space metric of its level-1 regulariser and its
+    singularity-avoidance direction (docs/controllers/hqp.md)."""
+
+    euclidean = "euclidean"  # the paper: 1e-8·I and ∇w/‖∇w‖
+    inertia = "inertia"  # 1e-8·M and M⁻¹∇w/‖M⁻¹∇w‖, consistent with N = I − M⁻¹JᵀΛJ
+
+
+class SE3Formulation(Enum):
+    """How ``controller=se3_lie`` evaluates its law (the same law; see its module docstring)."""
+
+    twist = "twist"  # reduced closed form: dexp and ḋexp cancel (fast, default)
+    lambda_space = "lambda_space"  # literally through λ̈_ref = −K_V λ̇ − K_P λ + K_F γ
+
+
 # --------------------------------------------------------------------------- robot
 @dataclass
 class RobotConfig:
@@ -150,6 +165,50 @@ class ImpedanceConfig(ControllerConfig):
     condition_threshold: float = 1e8  # cond(J M⁻¹ Jᵀ) above which Λ uses a damped pseudo-inverse
 
 
+@dataclass
+class HQPConfig(ControllerConfig):
+    """HQP-AC: hierarchical QP with adaptive compliance (CONTROL_LAWS.md §2; seed ``HQPConfig``).
+
+    The stiffness law K_r = clip((1 − α)·K0, K_min_ratio·K0, K0), α = 1/(1 + exp(−k_alpha·F)),
+    already gives 0.5·K0 at F = 0. K0 is this config's, never the impedance gains.
+    The torque constraint uses the robot's software clip (robot.max_torque).
+    """
+
+    K0: List[float] = field(default_factory=lambda: [300.0, 300.0, 300.0, 50.0, 50.0, 50.0])
+    K_min_ratio: float = 0.3
+    k_alpha: float = 0.5  # [1/N]
+    omega_th: float = 0.08  # manipulability threshold of singularity avoidance
+    k_sa: float = 500.0
+    K_ji: List[float] = field(default_factory=lambda: [5.0] * 7)  # diagonal of the seed's 5·I [1/s²]
+    D_ji: List[float] = field(default_factory=lambda: [10.0] * 7)  # diagonal of the seed's 10·I [1/s]
+    k_ji: float = 1.0
+    dt_p: float = 0.05  # zero-order-hold prediction horizon of the constraints [s]
+    eps_abs: float = 1e-5  # ProxQP absolute accuracy
+    force_source: ForceSource = ForceSource.sensor
+    observer_kp: float = 20.0  # [1/s]
+    observer_ki: float = 40.0  # [1/s²]
+    preload_force: float = 0.0  # [N] along the docking axis; 0: off
+    preload_ramp_s: float = 1.5  # [s]
+    contact_deadband: float = 0.0  # [N] subtracted from the wrench norm
+    condition_threshold: float = 1e8  # cond(J M⁻¹ Jᵀ) above which Λ's eigenvalues are floored
+    null_space_metric: NullSpaceMetric = NullSpaceMetric.euclidean
+    solve_every_step: bool = False  # call ProxQP even when the closed-form optimum meets every row
+
+
+@dataclass
+class SE3LieConfig(ControllerConfig):
+    """SE(3) impedance in exponential coordinates (CONTROL_LAWS.md §3; seed
+    ``SE3ImpedanceConfig``). Diagonals of the 6×6 A, D, K, translation first."""
+
+    A_diag: List[float] = field(default_factory=lambda: [10.0, 10.0, 10.0, 1.0, 1.0, 1.0])  # [kg | kg·m²]
+    D_diag: List[float] = field(default_factory=lambda: [80.0, 80.0, 80.0, 10.0, 10.0, 10.0])  # [N·s/m | N·m·s/rad]
+    K_diag: List[float] = field(default_factory=lambda: [50.0, 50.0, 50.0, 25.0, 25.0, 25.0])  # [N/m | N·m/rad]
+    null_damping: float = 10.0  # null-space joint acceleration damping q̈ = −b·v [1/s]
+    condition_threshold: float = 1e8  # cond(J_b M⁻¹ J_bᵀ) above which Λ uses a damped pseudo-inverse
+    desired_wrench: List[float] = field(default_factory=lambda: [0.0] * 6)  # F_d in the desired TCP frame [N, N·m]
+    formulation: SE3Formulation = SE3Formulation.twist  # twist | lambda_space (same law)
+
+
 # --------------------------------------------------------------------------- trajectories
 @dataclass
 class TrajectoryConfig:
@@ -173,6 +232,55 @@ class HoldConfig(TrajectoryConfig):
     duration: float = 5.0
 
 
+@dataclass
+class TwoPhaseConfig(TrajectoryConfig):
+    """Approach to a pre-dock point ``standoff`` before the goal, then a slow docking segment.
+
+    Each segment is a rest-to-rest quintic of length L lasting
+    T = max(1.875·L/v_max, √(5.7735·L/a_max)) (CONTROL_LAWS.md §4; seed ``TrajectorySpec``).
+    """
+
+    standoff: float = 0.10  # pre-dock point this far before the goal along the docking axis [m]
+    v_max_approach: float = 0.10  # [m/s]
+    a_max_approach: float = 0.20  # [m/s²]
+    v_max_docking: float = 0.02  # [m/s]
+    a_max_docking: float = 0.05  # [m/s²]
+
+
+@dataclass
+class SE3ToppConfig(TrajectoryConfig):
+    """The twophase waypoints, each segment a constant-screw geodesic with a time-optimal
+    bang-bang profile under linear and angular speed/acceleration limits (paper Table 8)."""
+
+    standoff: float = 0.10  # [m]
+    v_max_approach: float = 0.10  # linear speed [m/s]
+    a_max_approach: float = 0.20  # linear acceleration [m/s²]
+    omega_max_approach: float = 0.20  # angular speed [rad/s]
+    alpha_max_approach: float = 0.20  # angular acceleration [rad/s²]
+    v_max_docking: float = 0.02  # [m/s]
+    a_max_docking: float = 0.05  # [m/s²]
+    omega_max_docking: float = 0.05  # [rad/s]
+    alpha_max_docking: float = 0.05  # [rad/s²]
+
+
+@dataclass
+class TrackingConfig(TrajectoryConfig):
+    """Free-space tracking test: transition, vertical circle, transition, horizontal figure-8.
+
+    Needs ``target=none``. Each phase is driven by the quintic time scaling (rest to rest).
+    """
+
+    transition_duration: float = 1.5  # each of the two transitions [s]
+    circle_duration: float = 5.0  # [s]
+    circle_radius: float = 0.10  # [m]
+    circle_frequency: float = 0.2  # mean revolutions per second [Hz]
+    circle_center_offset: float = -0.06  # circle centre relative to the start, world z [m]
+    figure8_duration: float = 5.0  # [s]
+    figure8_radius_x: float = 0.10  # x amplitude [m]
+    figure8_radius_y: float = 0.07  # y amplitude [m]
+    figure8_frequency: float = 0.2  # mean cycles per second [Hz]
+
+
 # --------------------------------------------------------------------------- task
 @dataclass
 class DockingGateConfig:
@@ -185,23 +293,98 @@ class DockingGateConfig:
 
 
 @dataclass
+class TrackingThresholds:
+    """When a free-space tracking run (``trajectory=tracking``) passes its gate (seed defaults).
+
+    RMS and peaks are taken over the planned motion (the segments), contacts over the
+    whole run; see compliant_docking/tracking_gate.py.
+    """
+
+    circle_position_rms_m: float = 0.005  # position RMS over the circle segment [m]
+    figure8_position_rms_m: float = 0.005  # position RMS over the figure-8 segment [m]
+    position_peak_m: float = 0.015  # peak position error over the motion [m]
+    orientation_rms_rad: float = 0.008726646259971648  # orientation RMS over the motion (0.5°) [rad]
+    torque_saturation_ratio: float = 0.01  # share of steps with a clipped torque command
+    max_contacts: int = 0  # largest number of MuJoCo contacts allowed at any step
+
+
+@dataclass
+class MisalignmentConfig:
+    """Error between the socket's TRUE pose (physics, gate) and the pose the planner BELIEVES.
+
+    The believed pose is the nominal ``target.pos``/``target.quat``; the true pose is
+    believed · Trans(x, y, 0) · Rz(yaw) · Rx(tilt), offsets in the believed socket frame
+    (origin at the seat, +z out of the opening; rotations about the seat point, tilt
+    about the yawed x axis). Each component is fixed, or drawn uniformly from its
+    ``*_range`` [low, high] with ``seed`` (then the fixed value must stay 0). See
+    compliant_docking/misalignment.py and docs/sweeps.md.
+    """
+
+    x: float = 0.0  # lateral offset along the socket x axis [m]
+    y: float = 0.0  # lateral offset along the socket y axis [m]
+    yaw_deg: float = 0.0  # rotation about the socket axis [deg]
+    tilt_deg: float = 0.0  # rotation about the (yawed) socket x axis [deg]
+    x_range: Optional[List[float]] = None  # [low, high]: draw x uniformly [m]
+    y_range: Optional[List[float]] = None  # [low, high]: draw y uniformly [m]
+    yaw_deg_range: Optional[List[float]] = None  # [low, high]: draw yaw uniformly [deg]
+    tilt_deg_range: Optional[List[float]] = None  # [low, high]: draw tilt uniformly [deg]
+    seed: int = 0  # seed of the draws (same seed, same draw)
+
+
+@dataclass
 class TaskConfig:
     """Initial conditions, run length and success criteria of the experiment.
 
     ``init_pos``/``init_quat`` left null: the start pose is derived from the socket pose
-    the planner believes, ``stroke`` before the seat (plus ``insertion_overshoot``).
+    the planner believes, ``stroke`` before the seat. The planner ends at start + stroke
+    (the seat) at rest; then the reference is pressed ``insertion_overshoot`` further
+    along the axis over ``press_duration`` (rest to rest), during the settle time.
     """
 
     name: str = MISSING
     init_pos: Optional[List[float]] = None  # TCP start position in the world [m]
     init_quat: Optional[List[float]] = None  # TCP start orientation, wxyz
-    stroke: List[float] = field(default_factory=lambda: [0.0, 0.0, -0.1])  # start → goal [m]
-    insertion_overshoot: float = 0.005  # goal this far past the seat, so the plug is pressed home [m]
+    stroke: List[float] = field(default_factory=lambda: [0.0, 0.0, -0.18])  # start → seat [m]
+    insertion_overshoot: float = 0.005  # after the motion, press the reference this far past the seat [m]
+    press_duration: float = 1.0  # how long that press takes (within settle_time) [s]
     duration: Optional[float] = None  # run length [s]; null: planner duration + settle_time
     settle_time: float = 3.0  # run time after the trajectory ends [s]
     steady_window: float = 2.0  # window at the end for the steady-state metrics [s]
     gate: DockingGateConfig = field(default_factory=DockingGateConfig)
+    tracking_gate: TrackingThresholds = field(default_factory=TrackingThresholds)  # trajectory=tracking
+    misalignment: MisalignmentConfig = field(default_factory=MisalignmentConfig)  # true vs believed socket pose
     progress: bool = True  # print a progress line while simulating
+
+
+# --------------------------------------------------------------------------- render
+@dataclass
+class NoRenderConfig:
+    """``render=none`` (the default): no video, and nothing of the renderer is imported."""
+
+    name: str = "none"
+
+
+@dataclass
+class RenderConfig:
+    """``render=video``: ``docking.mp4`` in the run directory (docs/rendering.md).
+
+    Rendered after the simulation by replaying the logged joint positions, so the loop
+    pays nothing. The video has round(simulated time × fps / speed) frames (at least
+    one); frame i shows the logged step nearest to t = i · speed / fps.
+    """
+
+    name: str = "video"
+    fps: int = 30  # frames per second of video [1/s]
+    speed: float = 1.0  # simulated seconds per second of video (0.25: 4× slow motion)
+    width: int = 960  # frame width [px], rounded down to even (H.264 4:2:0)
+    height: int = 540  # frame height [px], force strip included, rounded down to even
+    camera: str = "track_cam"  # model camera of the main view (the scene's, aimed at the tool)
+    closeup: bool = True  # a second view beside it, close to the socket mouth (or the tool)
+    closeup_distance: float = 0.2  # close-up camera distance from what it looks at [m]
+    overlay: bool = True  # time and contact force: text and a force-over-time strip
+    shadows: bool = False  # shadows: about 3× slower with software OpenGL
+    antialias: bool = False  # 4× multisampling: about 3× slower with software OpenGL
+    crf: int = 23  # H.264 constant rate factor: 0 lossless … 51 worst
 
 
 # --------------------------------------------------------------------------- top level
@@ -214,6 +397,8 @@ class Config:
     controller: Any = MISSING  # one of the controller schemas
     trajectory: Any = MISSING  # one of the planner schemas
     task: TaskConfig = MISSING
+    render: Any = MISSING  # NoRenderConfig or RenderConfig
+    viewer: bool = False  # MuJoCo's interactive viewer, paced to real time (one run, a display)
 
 
 _SCHEMAS: dict[str, dict[str, type]] = {
@@ -221,9 +406,11 @@ _SCHEMAS: dict[str, dict[str, type]] = {
     "tool": {"tool": ToolConfig},
     "target": {"socket": TargetConfig, "none": NoTargetConfig},
     "physics": {"physics": PhysicsConfig},
-    "controller": {"impedance": ImpedanceConfig},
-    "trajectory": {"quintic": QuinticConfig, "hold": HoldConfig},
+    "controller": {"impedance": ImpedanceConfig, "hqp": HQPConfig, "se3_lie": SE3LieConfig},
+    "trajectory": {"quintic": QuinticConfig, "hold": HoldConfig, "twophase": TwoPhaseConfig,
+                   "se3topp": SE3ToppConfig, "tracking": TrackingConfig},
     "task": {"task": TaskConfig},
+    "render": {"none": NoRenderConfig, "video": RenderConfig},
 }
 
 
@@ -234,3 +421,19 @@ def register_schemas() -> None:
     for group, schemas in _SCHEMAS.items():
         for name, node in schemas.items():
             cs.store(group=f"schema/{group}", name=name, node=node)
+
+
+def load_config(*overrides: str):
+    """The composed config for these overrides, exactly as the command line builds it.
+
+    For scripts, notebooks and tests: ``simulate.prepare(load_config("robot=fr3"))``.
+    """
+    from hydra import compose, initialize_config_dir
+    from hydra.core.global_hydra import GlobalHydra
+
+    from compliant_docking import CONF_DIR
+
+    register_schemas()
+    GlobalHydra.instance().clear()
+    with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
+        return compose(config_name="config", overrides=list(overrides))

@@ -15,12 +15,17 @@ from compliant_docking import CONF_DIR
 GROUPS = {
     "robot": "the arm",
     "tool": "the plug on the flange",
-    "target": "the socket (none: free space)",
+    "target": "the socket; none: free space",
     "physics": "MuJoCo options and gravity",
     "controller": "the control law",
     "trajectory": "the planner",
     "task": "start pose, run length, success criteria",
+    "render": "video of the run: render=video writes docking.mp4",
+    "experiment": "presets, added with +experiment=NAME",
+    "robot_controller": "per-robot gains, applied automatically as ${robot}_${controller}",
 }
+#: groups that are not for composing by hand
+HIDDEN = ("hydra", "schema")
 
 USAGE = """\
 compliant-docking: simulate a robot arm docking a plug into a socket under compliant control.
@@ -47,10 +52,13 @@ def print_help(overrides: list[str]) -> None:
         print("Configuration groups (group=option; default first):")
         cfg = compose(config_name="config",
                       overrides=[o for o in overrides if "=" in o and not o.startswith("-")])
-        for group, what in GROUPS.items():
+        groups = [g for g in loader.list_groups("") if not g.startswith(HIDDEN)]
+        for group in sorted(groups, key=lambda g: (list(GROUPS).index(g) if g in GROUPS else 99, g)):
             options = sorted(loader.get_group_options(group))
-            default = cfg[group].get("name")
+            node = cfg.get(group)
+            default = node.get("name") if hasattr(node, "get") else None
             ordered = [default] + [o for o in options if o != default] if default in options else options
-            print(f"  {group:<11} {', '.join(ordered):<40} {what}")
+            what = f"  — {GROUPS[group]}" if group in GROUPS else ""
+            print(f"  {group:<17} {', '.join(ordered)}{what}")
         print("\nThe composed configuration (override any key as key=value):\n")
         print(OmegaConf.to_yaml(cfg))

@@ -22,9 +22,11 @@ import numpy as np
 from omegaconf import DictConfig, OmegaConf
 
 from compliant_docking.metrics import DockingMetrics, finite_or_none
+from compliant_docking.misalignment import record_for as misalignment_record
 
 METRICS_FILE = "metrics.json"
 TIMESERIES_FILE = "timeseries.parquet"
+SUMMARY_FILE = "summary.txt"
 FIGURES_DIR = "figures"
 
 #: exit status of ``python -m compliant_docking``
@@ -49,23 +51,29 @@ def _one_line(exc: BaseException) -> str:
     return text if isinstance(exc, (ValueError, RuntimeError)) else f"{type(exc).__name__}: {text}"
 
 
-def execute(cfg: DictConfig, out_dir: Path, *, identity: dict | None = None,
-            figures: bool = True, echo: bool = True) -> dict:
+def execute(cfg: DictConfig, out_dir: Path, *, figures: bool = True, echo: bool = True) -> dict:
     """Run the job of ``cfg`` into ``out_dir``; returns the metrics record (never raises).
 
-    ``identity``: fields naming the job (config choices, overrides) copied into the record.
+    The record starts with the fields naming the job (config choices, overrides).
     """
     from compliant_docking.simulate import Diverged, prepare
 
     started = time.perf_counter()
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    record: dict = {"status": "failed", "error": None, "success": False, **(identity or {})}
+    record: dict = {"status": "failed", "error": None, "success": False, **job_identity(cfg)}
     record.update({k: None for k in DockingMetrics.__dataclass_fields__})
+    record.update(misalignment_record(cfg))  # true vs believed socket pose (flat keys)
     sim = None
     try:
+        show = None
+        if cfg.get("viewer"):  # MuJoCo's viewer at real time; refused in a sweep or without a display
+            from compliant_docking import viewer as show
+
+            show.check_allowed()
         sim = prepare(cfg)
-        sim.run(progress=bool(cfg.task.progress) and echo)
+        sim.run(progress=bool(cfg.task.progress) and echo,
+                on_step=show.RealTimeViewer(sim) if show else None)
         record.update(_evaluate(sim, out_dir, figures=figures))
     except Diverged as exc:
         record["error"] = str(exc)
@@ -81,12 +89,22 @@ def execute(cfg: DictConfig, out_dir: Path, *, identity: dict | None = None,
                                       if sim.loop_wall_time > 0 else None)
         record["loop_wall_time_s"] = sim.loop_wall_time or None
         record.update(sim.controller.diagnostics())
+    if cfg.get("render") is not None and cfg.render.name != "none":  # docking.mp4 (render.py)
+        from compliant_docking.render import record_video
+
+        record.update(record_video(sim, cfg, out_dir))  # never raises: video_error says why
     record["wall_time_s"] = time.perf_counter() - started
     if record["status"] == "failed":
         record["success"] = False
-    write_metrics(out_dir / METRICS_FILE, record)
+    summary = format_summary(record, cfg) + f"\n  run directory: {_display_path(out_dir)}"
+    if "video_error" in record:  # render=video: the video, or why there is none
+        from compliant_docking.render import summary_line
+
+        summary += summary_line(record)
+    atomic_write_text(out_dir / SUMMARY_FILE, summary + "\n")
+    write_metrics(out_dir / METRICS_FILE, record)  # last: its presence means "finished"
     if echo:
-        print(format_summary(record, cfg))
+        print(summary)
     return record
 
 
@@ -107,7 +125,13 @@ def _evaluate(sim, out_dir: Path, *, figures: bool) -> dict:
     result["contacts_max"] = int(ts["contacts"].max()) if len(ts) else None
     result["torque_saturation_ratio"] = float(ts["torque_saturated"].mean()) if len(ts) else None
 
+    # The gate: docking runs → the docking gate; free-space runs of the tracking planner →
+    # the tracking gate; other free-space runs (hold, …) have no gate: success is null.
+    from compliant_docking.trajectories.tracking import TrackingTrajectory
+
     failures: list[str] = []
+    gated = True
+    complete = sim.complete
     if sim.scene.socket is not None:
         seat = M.seat_state(ts, sim.scene.socket.true, float(cfg.task.steady_window),
                             float(cfg.task.gate.depth_tolerance_m))
@@ -115,11 +139,19 @@ def _evaluate(sim, out_dir: Path, *, figures: bool) -> dict:
                       seat_lateral_error_m=seat.lateral_error_m,
                       seat_tilt_deg=seat.tilt_deg, seated_time_s=seat.seated_time_s)
         failures = M.docking_gate(seat, docking, cfg.task.gate)
-    complete = sim.complete
+    elif isinstance(sim.trajectory, TrackingTrajectory):
+        from compliant_docking.tracking_gate import tracking_gate
+
+        gate = tracking_gate(ts, sim.trajectory.segments, cfg.task.tracking_gate,
+                             complete=complete)
+        result.update(gate.record())
+        failures = list(gate.failures)
+    else:
+        gated = False
     if not complete:
         failures = sim.notes + failures
     result["status"] = "ok" if complete else "incomplete"
-    result["success"] = complete and not failures
+    result["success"] = (complete and not failures) if gated else None
     result["gate_failures"] = "; ".join(failures) or None
 
     _atomic_parquet(ts, out_dir / TIMESERIES_FILE)
@@ -138,7 +170,7 @@ def _evaluate(sim, out_dir: Path, *, figures: bool) -> dict:
 
 def _atomic_parquet(frame, path: Path) -> None:
     tmp = path.with_name(f".{path.name}.tmp")
-    frame.to_parquet(tmp, index=False)
+    frame.to_parquet(tmp, index=False, compression="zstd")
     os.replace(tmp, path)
 
 
@@ -176,7 +208,7 @@ def format_summary(record: dict, cfg: DictConfig | None = None) -> str:
         ("final lateral error", _num(r("final_lateral_error_m"), ".3f", "mm", 1e3)),
         ("final orientation error", _num(r("final_orientation_error_rad"), ".3f", "deg", 180 / np.pi)),
     ]
-    if r("seat_depth_error_m") is not None or r("gate_failures"):
+    if r("seat_depth_error_m") is not None or (r("gate_failures") and r("tracking_gate") is None):
         rows += [
             ("[seat, true socket pose]", None),
             ("depth error", _num(r("seat_depth_error_m"), ".3f", "mm", 1e3)),
@@ -184,6 +216,10 @@ def format_summary(record: dict, cfg: DictConfig | None = None) -> str:
             ("tilt", _num(r("seat_tilt_deg"), ".3f", "deg")),
             ("seated at", _num(r("seated_time_s"), ".2f", "s")),
         ]
+    if r("tracking_gate") is not None:  # printer hook: the free-space tracking gate
+        from compliant_docking.tracking_gate import summary_rows
+
+        rows += summary_rows(record)
     rows += [
         ("[run]", None),
         ("simulated", _num(r("sim_time_s"), ".2f", "s")),
@@ -196,8 +232,13 @@ def format_summary(record: dict, cfg: DictConfig | None = None) -> str:
         lines.append(label if value is None else f"  {label:<{width}} : {value}")
     status = r("status")
     verdict = "success" if r("success") else ("FAILED" if status == "failed" else "not docked")
+    if status != "failed" and r("tracking_gate") is not None:
+        verdict = f"tracking gate {r('tracking_gate')}"
+    elif status != "failed" and r("success") is None:
+        verdict = "no gate"
+    success = "null" if r("success") is None else str(bool(r("success"))).lower()
     lines.append("-" * 64)
-    lines.append(f"  status {status} · success {str(bool(r('success'))).lower()} ({verdict})")
+    lines.append(f"  status {status} · success {success} ({verdict})")
     if r("error"):
         lines.append(f"  error: {r('error')}")
     if r("gate_failures"):
@@ -205,9 +246,20 @@ def format_summary(record: dict, cfg: DictConfig | None = None) -> str:
     return "\n".join(lines)
 
 
+def _display_path(path: Path) -> str:
+    """The path relative to the working directory when it lies below it."""
+    try:
+        return str(path.resolve().relative_to(Path.cwd().resolve()))
+    except ValueError:
+        return str(path)
+
+
 def exit_status(record: dict) -> int:
+    """0: succeeded, or finished with no gate to pass (success null); 1: failed; 3: gate not passed."""
     if record.get("status") == "failed":
         return EXIT_FAILED
+    if record.get("status") == "ok" and record.get("success") is None:
+        return EXIT_SUCCESS
     return EXIT_SUCCESS if record.get("success") else EXIT_GATE
 
 

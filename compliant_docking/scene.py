@@ -27,6 +27,7 @@ import pinocchio as pin
 from omegaconf import DictConfig, OmegaConf
 
 from compliant_docking import geometry, resolve_path
+from compliant_docking.misalignment import Misalignment, draw
 from compliant_docking.models import ArmModel, RigidTool, mount_placement
 
 CAMERA = "track_cam"
@@ -38,6 +39,7 @@ class SocketPose:
 
     true: pin.SE3
     believed: pin.SE3
+    misalignment: Misalignment = Misalignment()  # true = believed · misalignment.apply
 
 
 @dataclass
@@ -119,11 +121,18 @@ def rigid_tool(spec: mujoco.MjSpec, source: str) -> RigidTool:
 
 
 def socket_pose(cfg: DictConfig) -> SocketPose | None:
-    """The socket's nominal (believed) and physical (true) seat pose in the world."""
+    """The socket's nominal (believed) and physical (true) seat pose in the world.
+
+    believed = ``target.pos``/``target.quat``; true = believed · the misalignment of
+    ``task.misalignment`` (fixed or drawn with its seed; compliant_docking/misalignment.py).
+    """
+    offset = draw(cfg.task.get("misalignment"))
     if cfg.target.name == "none":
+        if not offset.is_zero:
+            raise ValueError("task.misalignment needs a socket (target=none has none)")
         return None
     nominal = mount_placement(cfg.target.pos, cfg.target.quat)
-    return SocketPose(true=nominal, believed=nominal)
+    return SocketPose(true=offset.apply(nominal), believed=nominal, misalignment=offset)
 
 
 def _add_glue(spec: mujoco.MjSpec, tool_prefix: str, socket: SocketPose | None) -> None:

@@ -13,6 +13,7 @@ from __future__ import annotations
 import sys
 import time
 from dataclasses import dataclass, field
+from typing import Callable
 
 import mujoco
 import numpy as np
@@ -23,7 +24,8 @@ from omegaconf import DictConfig
 from compliant_docking.controllers.base import ControlContext, Controller
 from compliant_docking.scene import Scene, build_scene
 from compliant_docking.telemetry import Telemetry
-from compliant_docking.trajectories.base import Reference, ReferenceTable, Trajectory, Waypoints
+from compliant_docking.trajectories.base import (PressHome, Reference, ReferenceTable, Trajectory,
+                                                 Waypoints)
 
 #: joint speed regarded as an exploding state [rad/s]
 EXPLODING_SPEED = 100.0
@@ -59,8 +61,12 @@ class Simulation:
         """Whether the run covers the whole planned trajectory."""
         return self.telemetry.count * self.scene.model.opt.timestep >= self.trajectory.duration - 1e-9
 
-    def run(self, progress: bool = False) -> Telemetry:
+    def run(self, progress: bool = False, on_step: Callable[[int], None] | None = None) -> Telemetry:
         """Simulate ``n_steps`` steps; raises :class:`Diverged` when the physics blows up.
+
+        ``on_step(k)``, if given, is called after step k's ``mj_step`` (``data`` then holds
+        the state at t = (k + 1)·dt), e.g. to pace an interactive viewer; None (the
+        default) costs one ``is not None`` test per step.
 
         The torque clip is MuJoCo's actuator ``ctrlrange`` (set to ±robot.max_torque by the
         scene), so the loop writes the command and the log keeps it; the applied torque
@@ -92,6 +98,8 @@ class Simulation:
             log_w[k] = wrench
             log_contacts[k] = data.ncon
             mj_step(model, data)
+            if on_step is not None:
+                on_step(k)
             if k % CHECK_EVERY == 0:
                 log.count = k + 1
                 if bad_qacc.number or not np.isfinite(qvel).all() or \
@@ -134,11 +142,13 @@ def _wrench_reader(scene: Scene, data: mujoco.MjData, out: np.ndarray):
     local = np.zeros((2, 3))  # the wrench at the TCP in sensor axes, rows [f; m]
     local_flat = local.reshape(6)
     out_rows = out.reshape(2, 3)  # a view of out
+    # The tool's weight, as the sensor sees it, at the TCP: f = m g and
+    # moment (c − p_tcp) × m g = −[m g]× R_dock (com − tcp) with constant parts.
     weight = tool.mass * scene.gravity
     has_weight = bool(np.any(weight))
-    tcp_pos = data.site_xpos[scene.tcp_site]
-    body_rot = data.xmat[scene.tool_body].reshape(3, 3)
-    body_pos = data.xpos[scene.tool_body]
+    weight_moment = -pin.skew(weight)
+    com_from_tcp = tool.com - tool.tcp.translation  # dock frame
+    dock_rot = data.xmat[scene.tool_body].reshape(3, 3)
 
     def read() -> None:
         # ndarray.dot: a fraction of the call overhead of `@` on arrays this small
@@ -146,7 +156,7 @@ def _wrench_reader(scene: Scene, data: mujoco.MjData, out: np.ndarray):
         local.dot(site_rot_T, out=out_rows)  # each row rotated to world axes
         if has_weight:  # payload compensation, as on a real F/T sensor
             out[:3] -= weight
-            out[3:] -= _cross(body_pos + body_rot.dot(tool.com) - tcp_pos, weight)
+            out[3:] -= weight_moment.dot(dock_rot.dot(com_from_tcp))
 
     return read
 
@@ -196,7 +206,7 @@ def task_waypoints(cfg: DictConfig, scene: Scene) -> Waypoints:
         return Waypoints(start=pin.SE3(rot, np.asarray(task.init_pos, float)), goal=None, axis=axis)
 
     if not length > 0.0:
-        raise ValueError(f"task.stroke must be a non-zero vector, got {list(stroke)}")
+        raise ValueError(f"task.stroke must be a non-zero vector, got {stroke.tolist()}")
     axis = stroke / length
     seat = scene.socket.believed
     if task.init_pos is None:
@@ -205,8 +215,8 @@ def task_waypoints(cfg: DictConfig, scene: Scene) -> Waypoints:
         start_pos = np.asarray(task.init_pos, dtype=float)
     rot = (_with_axis(guess, -seat.rotation[:, 2]) if task.init_quat is None
            else _quat_matrix(task.init_quat, "task.init_quat"))
-    goal_pos = start_pos + stroke + float(task.insertion_overshoot) * axis
-    return Waypoints(start=pin.SE3(rot, start_pos), goal=pin.SE3(rot, goal_pos), axis=axis)
+    return Waypoints(start=pin.SE3(rot, start_pos), goal=pin.SE3(rot, start_pos + stroke),
+                     axis=axis)
 
 
 def _with_axis(rot: np.ndarray, z_axis: np.ndarray) -> np.ndarray:
@@ -256,6 +266,13 @@ def prepare(cfg: DictConfig) -> Simulation:
     # _partial_: the config's parameters are bound first, the run-time objects passed
     # directly (instantiate would otherwise turn dataclass arguments into dicts)
     trajectory = instantiate(cfg.trajectory, _partial_=True, _convert_="all")(waypoints=waypoints)
+    overshoot = float(cfg.task.insertion_overshoot)
+    if waypoints.goal is not None and overshoot != 0.0:
+        if not 0.0 < cfg.task.press_duration <= cfg.task.settle_time:
+            raise ValueError(f"task.press_duration ({cfg.task.press_duration:g} s) must be > 0 and "
+                             f"at most task.settle_time ({cfg.task.settle_time:g} s): the press "
+                             f"happens after the planned motion, while the run settles")
+        trajectory = PressHome(trajectory, overshoot * waypoints.axis, cfg.task.press_duration)
     duration, notes = run_duration(cfg, trajectory)
     ref = Reference()
     trajectory.sample(0.0, ref)

@@ -1,4 +1,4 @@
-"""Shared test helpers: compose configs with Hydra's compose API (no run directory)."""
+"""Shared test helpers: composed configs (no run directory) and the command line."""
 
 from __future__ import annotations
 
@@ -7,21 +7,11 @@ import subprocess
 import sys
 from pathlib import Path
 
-import pytest
-from hydra import compose, initialize_config_dir
-from hydra.core.global_hydra import GlobalHydra
+from compliant_docking import REPO_ROOT
+from compliant_docking.config import load_config
 
-from compliant_docking import CONF_DIR, REPO_ROOT
-from compliant_docking.config import register_schemas
-
-register_schemas()
-
-
-def make_cfg(*overrides: str):
-    """The composed config for these overrides, exactly as the CLI would build it."""
-    GlobalHydra.instance().clear()
-    with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
-        return compose(config_name="config", overrides=list(overrides))
+#: the composed config for some overrides, exactly as the CLI would build it
+make_cfg = load_config
 
 
 def run_cli(*args: str, cwd: Path | None = None, timeout: float = 300) -> subprocess.CompletedProcess:
@@ -30,8 +20,3 @@ def run_cli(*args: str, cwd: Path | None = None, timeout: float = 300) -> subpro
     return subprocess.run([sys.executable, "-m", "compliant_docking", *args],
                           cwd=cwd or REPO_ROOT, capture_output=True, text=True,
                           timeout=timeout, env=env)
-
-
-@pytest.fixture
-def cfg_factory():
-    return make_cfg

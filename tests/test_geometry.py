@@ -209,11 +209,17 @@ def test_plug_seats_in_rig(offset, sectors):
 
 
 def test_seated_penetration_stays_small_at_30_newton():
+    """Contact softness against the scale that matters, the 0.4 mm clearance: pressed with
+    30 N the plug sinks less than a fifth of it; striking the seat at the rig's 50 mm/s
+    (over twice the planners' fastest approach) less than 60 %. (The 5 ms time constant
+    gives ~53 µm and ~200 µm; the earlier 2 ms gave ~9 µm and ~75 µm but resolved impacts
+    within one step, see ContactParams.)"""
     case = bench.Case("test", offset=0.003, push=30.0)
     result = bench.insert(PlugGeometry(), SocketGeometry(), ContactParams(), case)
+    clearance = SocketGeometry().radial_clearance
     assert result.seated
-    assert -result.steady_contact_dist < 40e-6
-    assert -result.min_contact_dist < 0.25 * SocketGeometry().radial_clearance  # impact
+    assert -result.steady_contact_dist < 0.2 * clearance
+    assert -result.min_contact_dist < 0.6 * clearance  # impact
 
 
 def test_oversized_plug_does_not_seat():

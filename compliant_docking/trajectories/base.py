@@ -101,6 +101,38 @@ class Trajectory(ABC):
         return out
 
 
+class PressHome(Trajectory):
+    """A docking planner followed by a press: the planned motion ends at the seat at rest;
+    then the reference moves ``offset`` further (rest to rest, quintic scaling) during the
+    first ``press_duration`` seconds after it, so a compliant controller presses the plug
+    home with a force of about its stiffness times |offset| instead of striking the seat.
+
+    ``duration`` stays the planner's: the press happens during the run's settle time.
+    """
+
+    def __init__(self, inner: Trajectory, offset: np.ndarray, press_duration: float):
+        if not press_duration > 0.0:
+            raise ValueError(f"task.press_duration must be > 0 s, got {press_duration}")
+        self.inner = inner
+        self.duration = inner.duration
+        self.offset = np.asarray(offset, dtype=float)
+        self.press_duration = float(press_duration)
+
+    @property
+    def segments(self) -> list[tuple[str, float, float]]:
+        end = self.duration
+        return [*self.inner.segments, ("press", end, end + self.press_duration)]
+
+    def table(self, t: np.ndarray) -> ReferenceTable:
+        out = self.inner.table(t)
+        T = self.press_duration
+        s, ds, dds = quintic_scaling((out.t - self.duration) / T)
+        out.pos[:] += np.outer(s, self.offset)
+        out.twist[:, :3] += np.outer(ds / T, self.offset)
+        out.accel[:, :3] += np.outer(dds / T ** 2, self.offset)
+        return out
+
+
 def quintic_scaling(u):
     """s(u) = 10u³ − 15u⁴ + 6u⁵ on [0, 1] (clamped outside) and its first two derivatives.
 

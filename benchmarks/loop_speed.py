@@ -1,0 +1,91 @@
+"""How fast the simulation loop runs, as ratios measured in one process.
+
+For each controller (default: every option in conf/controller) it prepares the default
+docking run, times the simulation loop, then replays the recorded torques with physics
+only (same start state, same torques, hence the same contacts) and reports
+
+  real-time factor   simulated time / loop wall time
+  loop / replay      loop wall time / physics-only replay wall time
+
+as the best and the median of ``--repeats`` runs (this machine is a shared VM: the best
+is the code's speed, the median what a user sees). It also times the whole command
+``python -m compliant_docking`` (imports, Hydra, simulation, metrics, figures) once.
+
+    python benchmarks/loop_speed.py                      # all controllers, iiwa14
+    python benchmarks/loop_speed.py --controllers impedance --robots iiwa14 fr3
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from compliant_docking import CONF_DIR, REPO_ROOT
+from compliant_docking.config import load_config
+from compliant_docking.simulate import prepare, replay_physics
+
+#: targets of the issues: minimum real-time factor per controller, maximum loop/replay
+RTF_TARGETS = {"impedance": 25.0, "hqp": 15.0, "se3_lie": 20.0}
+RATIO_TARGET = 6.0
+CLI_TARGET_S = 10.0
+
+
+def measure(overrides: list[str]) -> tuple[float, float, float]:
+    """(real-time factor, loop µs/step, replay µs/step) of one run."""
+    sim = prepare(load_config(*overrides))
+    sim.run()
+    steps = sim.telemetry.count
+    replay = replay_physics(sim)
+    sim_time = steps * sim.scene.model.opt.timestep
+    return sim_time / sim.loop_wall_time, sim.loop_wall_time / steps * 1e6, replay / steps * 1e6
+
+
+def time_cli() -> float:
+    with tempfile.TemporaryDirectory() as tmp:
+        start = time.perf_counter()
+        subprocess.run([sys.executable, "-m", "compliant_docking", f"hydra.run.dir={tmp}/run",
+                        "task.progress=false"], cwd=REPO_ROOT, check=True, capture_output=True)
+        return time.perf_counter() - start
+
+
+def main() -> int:
+    options = sorted(p.stem for p in (Path(CONF_DIR) / "controller").glob("*.yaml"))
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--controllers", nargs="+", default=options, choices=options)
+    parser.add_argument("--robots", nargs="+", default=["iiwa14"])
+    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--no-cli", action="store_true", help="skip timing the whole command")
+    parser.add_argument("overrides", nargs="*", help="extra Hydra overrides for every run")
+    args = parser.parse_args()
+
+    print(f"{'robot':8} {'controller':11} {'RTF best':>9} {'RTF median':>11} {'loop µs':>8} "
+          f"{'replay µs':>10} {'loop/replay':>12}  target")
+    failures = 0
+    for robot in args.robots:
+        for controller in args.controllers:
+            runs = [measure([f"robot={robot}", f"controller={controller}", *args.overrides])
+                    for _ in range(args.repeats)]
+            rtf = [r[0] for r in runs]
+            best = max(range(len(runs)), key=lambda i: rtf[i])
+            ratio = runs[best][1] / runs[best][2]
+            target = RTF_TARGETS.get(controller)
+            ok = (target is None or rtf[best] >= target) and ratio <= RATIO_TARGET
+            failures += not ok
+            print(f"{robot:8} {controller:11} {rtf[best]:9.1f} {statistics.median(rtf):11.1f} "
+                  f"{runs[best][1]:8.1f} {runs[best][2]:10.1f} {ratio:12.2f}  "
+                  f"RTF ≥ {target or '-'}, ratio ≤ {RATIO_TARGET:g}: {'met' if ok else 'MISSED'}")
+    if not args.no_cli:
+        wall = time_cli()
+        failures += wall > CLI_TARGET_S
+        print(f"\nwhole `python -m compliant_docking` (default run): {wall:.2f} s wall "
+              f"(target < {CLI_TARGET_S:g} s: {'met' if wall <= CLI_TARGET_S else 'MISSED'})")
+    return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
