@@ -248,17 +248,13 @@ class TwoPhaseConfig(TrajectoryConfig):
 
 
 @dataclass
-class SE3ToppConfig(TrajectoryConfig):
-    """The twophase waypoints, each segment a constant-screw geodesic with a time-optimal
-    bang-bang profile under linear and angular speed/acceleration limits (paper Table 8)."""
+class SE3ToppConfig(TwoPhaseConfig):
+    """The twophase waypoints and linear limits, each segment a constant-screw geodesic with
+    a time-optimal bang-bang profile, also under angular speed/acceleration limits
+    (paper Table 8)."""
 
-    standoff: float = 0.10  # [m]
-    v_max_approach: float = 0.10  # linear speed [m/s]
-    a_max_approach: float = 0.20  # linear acceleration [m/s²]
     omega_max_approach: float = 0.20  # angular speed [rad/s]
     alpha_max_approach: float = 0.20  # angular acceleration [rad/s²]
-    v_max_docking: float = 0.02  # [m/s]
-    a_max_docking: float = 0.05  # [m/s²]
     omega_max_docking: float = 0.05  # [rad/s]
     alpha_max_docking: float = 0.05  # [rad/s²]
 
@@ -421,6 +417,9 @@ def register_schemas() -> None:
     for group, schemas in _SCHEMAS.items():
         for name, node in schemas.items():
             cs.store(group=f"schema/{group}", name=name, node=node)
+    from compliant_docking.launchers import register_schemas as register_launcher_schemas
+
+    register_launcher_schemas(cs)  # hydra/launcher=submitit_{local,slurm} (docs/cluster.md)
 
 
 def load_config(*overrides: str):

@@ -138,15 +138,16 @@ _F64 = np.float64
 
 
 # ----------------------------------------------------------------------------------
-# Scalar coefficient functions
+# Scalar coefficient functions (public kernels on Python floats: hot-loop callers such as
+# the se3_lie controller share one evaluation between log6 and dexp⁻ᵀ)
 # ----------------------------------------------------------------------------------
-def _trig(t):
+def trig_terms(t):
     """Return (sin t, cos t, 1 - cos t) with 1 - cos t = 2 sin^2(t/2) free of cancellation."""
     h = _sin(0.5 * t)
     return _sin(t), _cos(t), 2.0 * h * h
 
 
-def _coef0(t, x, s, co, omc):
+def coef0(t, x, s, co, omc):
     """Order-0 coefficients (a, b, c, g, e) at theta = t, x = t^2.
 
     a = sin t / t, b = (1 - cos t)/t^2, c = (t - sin t)/t^3,
@@ -168,7 +169,7 @@ def _coef0(t, x, s, co, omc):
     return a, b, c, g, e
 
 
-def _coef1(t, x, s, co, omc):
+def coef1(t, x, s, co, omc):
     """Order-1 coefficients f1 = f'(t)/t for f in (a, b, c, g, e).
 
     a1 = (t cos t - sin t)/t^3,            b1 = (t sin t - 2 (1 - cos t))/t^4,
@@ -192,7 +193,7 @@ def _coef1(t, x, s, co, omc):
     return a1, b1, c1, g1, e1
 
 
-def _coef2(t, x, s, co, omc):
+def coef2(t, x, s, co, omc):
     """Order-2 coefficients f2 = f1'(t)/t for f in (a, b, c).
 
     a2 = (3 sin t - 3 t cos t - t^2 sin t)/t^5,
@@ -215,12 +216,12 @@ def _coefficients(theta):
     """All scalar coefficients at angle ``theta`` as a dict (for tests and inspection)."""
     t = float(theta)
     x = t * t
-    s, co, omc = _trig(t)
+    s, co, omc = trig_terms(t)
     out = {}
     for names, vals in (
-        ("a b c g e".split(), _coef0(t, x, s, co, omc)),
-        ("a1 b1 c1 g1 e1".split(), _coef1(t, x, s, co, omc)),
-        ("a2 b2 c2".split(), _coef2(t, x, s, co, omc)),
+        ("a b c g e".split(), coef0(t, x, s, co, omc)),
+        ("a1 b1 c1 g1 e1".split(), coef1(t, x, s, co, omc)),
+        ("a2 b2 c2".split(), coef2(t, x, s, co, omc)),
     ):
         out.update(zip(names, vals))
     return out
@@ -379,8 +380,8 @@ def _exp3_list(w0, w1, w2):
     if t < TAYLOR_THETA_0:
         s = co = omc = 0.0
     else:
-        s, co, omc = _trig(t)
-    a, b, c, _, _ = _coef0(t, x, s, co, omc)
+        s, co, omc = trig_terms(t)
+    a, b, c, _, _ = coef0(t, x, s, co, omc)
     cth = 1.0 - b * x  # = cos(theta), also in the Taylor branch
     return _blk(cth, a * w0, a * w1, a * w2, w0, w1, w2,
                 0.5 * b * w0, 0.5 * b * w1, 0.5 * b * w2), a, b, c
@@ -393,7 +394,7 @@ def exp3(w):
     return np.array(R).reshape(3, 3)
 
 
-def _log3_list(r00, r01, r02, r10, r11, r12, r20, r21, r22):
+def log3_list(r00, r01, r02, r10, r11, r12, r20, r21, r22):
     """Rotation vector (w0, w1, w2, theta) of a rotation matrix given by its entries.
 
     theta = atan2(|y|, (tr R - 1)/2) with y = vee3((R - R^T)/2) = sin(theta) n; this is
@@ -433,11 +434,11 @@ def _log3_list(r00, r01, r02, r10, r11, r12, r20, r21, r22):
 def log3(R):
     """SO(3) logarithm: rotation vector w with exp3(w) = R and |w| in [0, pi].
 
-    Robust near 0 and near pi (see ``_log3_list``).  At exactly pi either of the two
+    Robust near 0 and near pi (see ``log3_list``).  At exactly pi either of the two
     equivalent vectors +-pi n may be returned.
     """
     R = np.asarray(R, dtype=float)
-    w0, w1, w2, _ = _log3_list(*R.reshape(-1).tolist())
+    w0, w1, w2, _ = log3_list(*R.reshape(-1).tolist())
     return np.array((w0, w1, w2))
 
 
@@ -449,7 +450,7 @@ def so3_left_jacobian(w):
     w0, w1, w2 = _vec(w, 3)
     x = w0 * w0 + w1 * w1 + w2 * w2
     t = _sqrt(x)
-    a, b, c, _, _ = _coef0(t, x, *(_trig(t) if t >= TAYLOR_THETA_0 else (0.0, 0.0, 0.0)))
+    a, b, c, _, _ = coef0(t, x, *(trig_terms(t) if t >= TAYLOR_THETA_0 else (0.0, 0.0, 0.0)))
     return np.array(_j_block(a, b, c, w0, w1, w2)).reshape(3, 3)
 
 
@@ -458,7 +459,7 @@ def so3_left_jacobian_inv(w):
     w0, w1, w2 = _vec(w, 3)
     x = w0 * w0 + w1 * w1 + w2 * w2
     t = _sqrt(x)
-    _, _, _, g, e = _coef0(t, x, *(_trig(t) if t >= TAYLOR_THETA_0 else (0.0, 0.0, 0.0)))
+    _, _, _, g, e = coef0(t, x, *(trig_terms(t) if t >= TAYLOR_THETA_0 else (0.0, 0.0, 0.0)))
     return np.array(_jinv_block(g, e, w0, w1, w2)).reshape(3, 3)
 
 
@@ -528,11 +529,11 @@ def _raise_if_near_pi(t, margin):
 
 
 def _log6_list(r, p0, p1, p2, check, margin):
-    w0, w1, w2, t = _log3_list(*r)
+    w0, w1, w2, t = log3_list(*r)
     if check:
         _raise_if_near_pi(t, margin)
     x = t * t
-    _, _, _, g, e = _coef0(t, x, *(_trig(t) if t >= TAYLOR_THETA_0 else (0.0, 0.0, 0.0)))
+    _, _, _, g, e = coef0(t, x, *(trig_terms(t) if t >= TAYLOR_THETA_0 else (0.0, 0.0, 0.0)))
     # v = J^-1 p = g p - (w x p)/2 + e w (w.p)
     es = e * (w0 * p0 + w1 * p1 + w2 * p2)
     v0 = g * p0 - 0.5 * (w1 * p2 - w2 * p1) + es * w0
@@ -663,9 +664,9 @@ def dexp(lam):
     v0, v1, v2, w0, w1, w2 = _vec(lam, 6)
     x = w0 * w0 + w1 * w1 + w2 * w2
     t = _sqrt(x)
-    trig = _trig(t) if t >= TAYLOR_THETA_0 else (0.0, 0.0, 0.0)
-    a, b, c, _, _ = _coef0(t, x, *trig)
-    a1, b1, c1, _, _ = _coef1(t, x, *trig)
+    trig = trig_terms(t) if t >= TAYLOR_THETA_0 else (0.0, 0.0, 0.0)
+    a, b, c, _, _ = coef0(t, x, *trig)
+    a1, b1, c1, _, _ = coef1(t, x, *trig)
     return _six(_j_block(a, b, c, w0, w1, w2),
                 _q_block(b, c, a1, b1, c1, v0, v1, v2, w0, w1, w2))
 
@@ -679,9 +680,9 @@ def dexp_inv(lam):
     v0, v1, v2, w0, w1, w2 = _vec(lam, 6)
     x = w0 * w0 + w1 * w1 + w2 * w2
     t = _sqrt(x)
-    trig = _trig(t) if t >= TAYLOR_THETA_0 else (0.0, 0.0, 0.0)
-    _, _, _, g, e = _coef0(t, x, *trig)
-    _, _, _, g1, e1 = _coef1(t, x, *trig)
+    trig = trig_terms(t) if t >= TAYLOR_THETA_0 else (0.0, 0.0, 0.0)
+    _, _, _, g, e = coef0(t, x, *trig)
+    _, _, _, g1, e1 = coef1(t, x, *trig)
     return _six(_jinv_block(g, e, w0, w1, w2),
                 _qinv_block(g1, e, e1, v0, v1, v2, w0, w1, w2))
 
@@ -695,10 +696,10 @@ def dexp_dot(lam, lam_dot):
     u0, u1, u2, z0, z1, z2 = _vec(lam_dot, 6)
     x = w0 * w0 + w1 * w1 + w2 * w2
     t = _sqrt(x)
-    trig = _trig(t) if t >= TAYLOR_THETA_0 else (0.0, 0.0, 0.0)
-    _, b, c, _, _ = _coef0(t, x, *trig)
-    a1, b1, c1, _, _ = _coef1(t, x, *trig)
-    a2, b2, c2 = _coef2(t, x, *trig)
+    trig = trig_terms(t) if t >= TAYLOR_THETA_0 else (0.0, 0.0, 0.0)
+    _, b, c, _, _ = coef0(t, x, *trig)
+    a1, b1, c1, _, _ = coef1(t, x, *trig)
+    a2, b2, c2 = coef2(t, x, *trig)
     return _six(_jdot_block(b, c, a1, b1, c1, w0, w1, w2, z0, z1, z2),
                 _qdot_block(b, c, a1, b1, c1, a2, b2, c2,
                             v0, v1, v2, w0, w1, w2, u0, u1, u2, z0, z1, z2))
@@ -714,10 +715,10 @@ def dexp_all(lam, lam_dot):
     u0, u1, u2, z0, z1, z2 = _vec(lam_dot, 6)
     x = w0 * w0 + w1 * w1 + w2 * w2
     t = _sqrt(x)
-    trig = _trig(t) if t >= TAYLOR_THETA_0 else (0.0, 0.0, 0.0)
-    a, b, c, g, e = _coef0(t, x, *trig)
-    a1, b1, c1, g1, e1 = _coef1(t, x, *trig)
-    a2, b2, c2 = _coef2(t, x, *trig)
+    trig = trig_terms(t) if t >= TAYLOR_THETA_0 else (0.0, 0.0, 0.0)
+    a, b, c, g, e = coef0(t, x, *trig)
+    a1, b1, c1, g1, e1 = coef1(t, x, *trig)
+    a2, b2, c2 = coef2(t, x, *trig)
     out = _fromiter(
         _six_entries(_j_block(a, b, c, w0, w1, w2),
                      _q_block(b, c, a1, b1, c1, v0, v1, v2, w0, w1, w2))

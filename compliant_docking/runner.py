@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 from omegaconf import DictConfig, OmegaConf
 
+from compliant_docking import provenance
 from compliant_docking.metrics import DockingMetrics, finite_or_none
 from compliant_docking.misalignment import record_for as misalignment_record
 
@@ -59,6 +60,7 @@ def execute(cfg: DictConfig, out_dir: Path, *, figures: bool = True, echo: bool 
     from compliant_docking.simulate import Diverged, prepare
 
     started = time.perf_counter()
+    started_at = provenance.now_iso()
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     record: dict = {"status": "failed", "error": None, "success": False, **job_identity(cfg)}
@@ -94,6 +96,7 @@ def execute(cfg: DictConfig, out_dir: Path, *, figures: bool = True, echo: bool 
 
         record.update(record_video(sim, cfg, out_dir))  # never raises: video_error says why
     record["wall_time_s"] = time.perf_counter() - started
+    record.update(provenance.collect(cfg, started_at=started_at))  # versions, git, config hash
     if record["status"] == "failed":
         record["success"] = False
     summary = format_summary(record, cfg) + f"\n  run directory: {_display_path(out_dir)}"

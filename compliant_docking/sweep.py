@@ -19,6 +19,13 @@ process never sees their records. Everything here therefore reads the sweep dire
   ``on_multirun_end``; or Ctrl-C) is finished by :func:`finish_aborted`, called by
   ``__main__.main()``: the summary of whatever finished is written all the same and the
   exit status is 1.
+- ``resume=<sweep dir>`` (compliant_docking/resume.py) runs a sweep again into its own
+  directory: :meth:`SweepCallback.on_multirun_start` checks the command against the
+  sweep's ``multirun.yaml`` first; jobs kept untouched print ``skipped``.
+- On the submitit launchers (compliant_docking/launchers.py) every job prints into its
+  own log file, so the launching process prints the progress lines (a
+  :class:`~compliant_docking.launchers.ProgressWatcher`); an aborted submitit sweep
+  writes no "interrupted" records, since its jobs may still be running.
 
 This module is imported by the launching process and by every worker: keep it light.
 """
@@ -58,12 +65,14 @@ class SweepOutcome:
 
 
 #: state of the sweep of this process (the launching one): set by the callback
-_state: dict[str, Any] = {"sweep_dir": None, "total": None, "outcome": None, "started": None}
+_state: dict[str, Any] = {"sweep_dir": None, "total": None, "outcome": None, "started": None,
+                          "watcher": None, "independent_jobs": False}
 
 
 def reset() -> None:
     """Forget the sweep state of this process (``__main__.main()`` calls it first)."""
-    _state.update(sweep_dir=None, total=None, outcome=None, started=None)
+    _state.update(sweep_dir=None, total=None, outcome=None, started=None, watcher=None,
+                  independent_jobs=False)
 
 
 def last_outcome() -> SweepOutcome | None:
@@ -91,6 +100,11 @@ def expected_jobs(config: DictConfig) -> int | None:
 
 def _workers(config: DictConfig) -> str:
     """'on 2 worker processes', or how else the launcher runs the jobs."""
+    from compliant_docking.launchers import describe
+
+    described = describe(config.hydra.launcher)
+    if described:
+        return described
     n_jobs = config.hydra.launcher.get("n_jobs")
     if n_jobs is None:
         return "one after another in this process"
@@ -107,23 +121,41 @@ class SweepCallback(Callback):
 
     ``figures``: also draw the comparison figures into ``<sweep>/comparison/`` at the end.
     ``progress``: print one line per finished job.
+    ``resume``: the sweep resumes the one in its directory (set by ``resume=<sweep dir>``).
     """
 
-    def __init__(self, figures: bool = True, progress: bool = True) -> None:
+    def __init__(self, figures: bool = True, progress: bool = True, resume: bool = False) -> None:
         self.figures = bool(figures)
         self.progress = bool(progress)
+        self.resume = bool(resume)
         self.total: int | None = None  # set in the parent, carried to the workers by pickle
 
     # -- parent process
     def on_multirun_start(self, config: DictConfig, **kwargs: Any) -> None:
+        resumed: list[str] = []
+        if self.resume:  # before anything is written; SystemExit passes Hydra's callback guard
+            from compliant_docking import resume
+
+            try:
+                resumed = resume.check_sweep(config)
+            except resume.ResumeError as exc:
+                raise SystemExit(resume.fail(exc)) from None
+        from compliant_docking.launchers import ProgressWatcher, is_submitit
+
         self.total = expected_jobs(config)
         sweep_dir = Path(str(config.hydra.sweep.dir))
+        independent = is_submitit(config.hydra.launcher)
         _state.update(sweep_dir=sweep_dir, total=self.total, outcome=None,
-                      started=time.perf_counter())
+                      started=time.perf_counter(), independent_jobs=independent)
         jobs = "?" if self.total is None else str(self.total)
         _print(f"sweep: {jobs} jobs {_workers(config)} → {_display(sweep_dir)}")
+        for line in resumed:
+            _print(line)
+        if independent and self.progress:  # the jobs print into their own log files
+            _state["watcher"] = ProgressWatcher(sweep_dir, self.total).start()
 
     def on_multirun_end(self, config: DictConfig, **kwargs: Any) -> None:
+        _stop_watcher()
         finish(Path(str(config.hydra.sweep.dir)), figures=self.figures)
 
     # -- worker process, after each job
@@ -133,11 +165,25 @@ class SweepCallback(Callback):
         if not self.progress or config.hydra.mode != RunMode.MULTIRUN:
             return
         try:
+            from hydra.core.utils import JobStatus
+
+            from compliant_docking.resume import SKIPPED
+
             out_dir = Path(str(config.hydra.runtime.output_dir))
             sweep_dir = Path(str(config.hydra.sweep.dir)).resolve()
-            _print(job_line(out_dir, sweep_dir, self.total))
+            line = job_line(out_dir, sweep_dir, self.total)
+            if job_return.status == JobStatus.COMPLETED and job_return.return_value == SKIPPED:
+                line = f"{line} · {SKIPPED}"
+            _print(line)
         except Exception as exc:  # progress must never fail a job
             _print(f"(progress line failed: {exc})")
+
+
+def _stop_watcher() -> None:
+    watcher = _state.get("watcher")
+    if watcher is not None:
+        _state["watcher"] = None
+        watcher.stop()
 
 
 def _print(text: str) -> None:
@@ -156,8 +202,11 @@ def finished_count(sweep_dir: Path, depth: int = 1) -> int:
     return sum(1 for _ in Path(sweep_dir).glob("*/" * depth + "metrics.json"))
 
 
-def job_line(out_dir: Path, sweep_dir: Path, total: int | None) -> str:
-    """``[3/6] 2_controller=hqp,robot=fr3 · ok · docked · peak 12.3 N · 4.2 s``."""
+def job_line(out_dir: Path, sweep_dir: Path, total: int | None, done: int | None = None) -> str:
+    """``[3/6] 2_controller=hqp,robot=fr3 · ok · docked · peak 12.3 N · 4.2 s``.
+
+    ``done``: the running count; by default the finished metrics.json files now.
+    """
     from compliant_docking.results import read_metrics
 
     record, problem = read_metrics(out_dir)
@@ -165,7 +214,8 @@ def job_line(out_dir: Path, sweep_dir: Path, total: int | None) -> str:
         depth = len(out_dir.resolve().relative_to(sweep_dir).parts)
     except ValueError:
         depth = 1
-    done = finished_count(sweep_dir, depth)
+    if done is None:
+        done = finished_count(sweep_dir, depth)
     count = f"[{done}/{total}]" if total else f"[{done} done]"
     if record is None:
         return f"{count} {out_dir.name} · {problem}"
@@ -194,7 +244,9 @@ def finish(sweep_dir: Path, *, figures: bool = True, aborted: bool = False) -> S
 
     sweep_dir = Path(sweep_dir)
     summary: dict[str, Path] = {}
-    if aborted and sweep_dir.is_dir():  # every job directory ends with a metrics.json
+    # every job directory ends with a metrics.json — except on submitit, whose jobs are
+    # processes of their own that may still be running (they write theirs when done)
+    if aborted and sweep_dir.is_dir() and not _state.get("independent_jobs"):
         for job_dir in scan(sweep_dir)[1]:
             record_orphan(job_dir)
     if sweep_dir.is_dir():
@@ -243,6 +295,10 @@ def _report(outcome: SweepOutcome, tally, frame, missing: int) -> None:
     lines = ["=" * 64, f"{head}{elapsed}: {tally.line()}"]
     if missing:
         lines.append(f"  {missing} more jobs never started")
+    if outcome.aborted:  # how to finish it (compliant_docking/resume.py)
+        again = f"the same command with resume={_display(outcome.sweep_dir)}"
+        lines.append(f"  jobs may still be running (submitit); when they are done: {again}"
+                     if _state.get("independent_jobs") else f"  to finish it: {again}")
     failed = frame[frame["status"] == "failed"] if len(frame) else frame
     for _, row in failed.iterrows():
         lines.append(f"  FAILED {row['job']}: {row.get('error')}")
@@ -272,9 +328,9 @@ def _comparison_text(summary_md: Path, max_width: int = 160) -> str:
     return table if 0 < width <= limit else ""
 
 
-ORPHAN_ERROR = ("no result: the sweep was aborted while this job ran (its worker process "
-                "died, e.g. a segmentation fault in it or in a sibling job, or the sweep was "
-                "interrupted); see the sweep's console output")
+ORPHAN_ERROR = ("interrupted: no result, the sweep was aborted while this job ran (its "
+                "worker process died, e.g. a segmentation fault in it or in a sibling job, "
+                "or the sweep was interrupted: Ctrl-C, SIGTERM); resume=<sweep dir> reruns it")
 
 
 def record_orphan(job_dir: Path) -> None:
@@ -282,6 +338,9 @@ def record_orphan(job_dir: Path) -> None:
 
     Written only by the process that launched the sweep, after its workers are gone,
     so the contract "every job directory ends with a metrics.json" holds after a crash.
+    Never replaces a metrics.json that appeared meanwhile (a hard link fails on an
+    existing name); the record is status failed with ``interrupted: true``, and a resume
+    reruns the job.
     """
     import json
 
@@ -289,7 +348,8 @@ def record_orphan(job_dir: Path) -> None:
 
     from compliant_docking.results import METRICS_FILE, TABLE10, read_overrides
 
-    record: dict = {"status": "failed", "error": ORPHAN_ERROR, "success": False}
+    record: dict = {"status": "failed", "error": ORPHAN_ERROR, "success": False,
+                    "interrupted": True}
     try:
         hydra_cfg = yaml.safe_load((job_dir / ".hydra" / "hydra.yaml").read_text(encoding="utf-8"))
         choices = hydra_cfg["hydra"]["runtime"]["choices"]
@@ -304,13 +364,21 @@ def record_orphan(job_dir: Path) -> None:
     tmp = path.with_name(f".{path.name}.tmp")
     try:
         tmp.write_text(json.dumps(record, indent=2) + "\n", encoding="utf-8")
-        os.replace(tmp, path)
+        try:
+            os.link(tmp, path)  # atomic, and never over a result written meanwhile
+        except FileExistsError:
+            pass
+        except OSError:  # a file system without hard links
+            if not path.exists():
+                os.replace(tmp, path)
+        tmp.unlink(missing_ok=True)
     except OSError as exc:
         print(f"sweep: could not write {path}: {exc}", file=sys.stderr)
 
 
 def finish_aborted() -> SweepOutcome | None:
     """Summarise a sweep that Hydra aborted (worker crash, Ctrl-C); None if none ran."""
+    _stop_watcher()
     sweep_dir = _state.get("sweep_dir")
     if sweep_dir is None or _state.get("outcome") is not None:
         return None

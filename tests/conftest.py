@@ -7,6 +7,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
+
 from compliant_docking import REPO_ROOT
 from compliant_docking.config import load_config
 
@@ -20,3 +22,15 @@ def run_cli(*args: str, cwd: Path | None = None, timeout: float = 300) -> subpro
     return subprocess.run([sys.executable, "-m", "compliant_docking", *args],
                           cwd=cwd or REPO_ROOT, capture_output=True, text=True,
                           timeout=timeout, env=env)
+
+
+def push_at_tcp(sim, force=(0.0, 0.0, 0.0), moment=(0.0, 0.0, 0.0)) -> None:
+    """A wrench acting at the TCP (world axes), applied through the tool body's
+    ``xfrc_applied``. MuJoCo applies that at the body's centre of mass, so the moment gets
+    r × F. Uses the kinematics already in ``sim.data`` (``prepare`` leaves them current).
+    """
+    data, scene = sim.data, sim.scene
+    r = data.site_xpos[scene.tcp_site] - data.xipos[scene.tool_body]
+    force, moment = np.asarray(force, float), np.asarray(moment, float)
+    data.xfrc_applied[scene.tool_body, :3] = force
+    data.xfrc_applied[scene.tool_body, 3:] = moment + np.cross(r, force)

@@ -6,24 +6,10 @@ import pinocchio as pin
 import pytest
 
 from compliant_docking.simulate import _wrench_reader, prepare
-from conftest import make_cfg
+from conftest import make_cfg, push_at_tcp
 
 FREE_SPACE = ("target=none", "trajectory=hold", "task.init_pos=[0.55,0.0,0.35]",
               "task.settle_time=0.0")
-
-
-def push_at_tcp(sim, force=(0.0, 0.0, 0.0), moment=(0.0, 0.0, 0.0)) -> None:
-    """A constant wrench acting at the TCP, applied through the tool body's xfrc_applied.
-
-    MuJoCo applies xfrc_applied at the body's centre of mass, so the moment gets r × F.
-    The tool barely rotates in these tests, so the lever arm stays constant.
-    """
-    data, scene = sim.data, sim.scene
-    mujoco.mj_forward(scene.model, data)
-    r = data.site_xpos[scene.tcp_site] - data.xipos[scene.tool_body]
-    force, moment = np.asarray(force, float), np.asarray(moment, float)
-    data.xfrc_applied[scene.tool_body, :3] = force
-    data.xfrc_applied[scene.tool_body, 3:] = moment + np.cross(r, force)
 
 
 @pytest.mark.parametrize("physics", ["space", "earth"])

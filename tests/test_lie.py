@@ -170,10 +170,10 @@ def test_taylor_polynomials_have_the_exact_coefficients(X):
     def trunc(name, k):
         return float(sum(c * Fraction(X) ** i for i, c in enumerate(SERIES[name][:k])))
 
-    a, b, c, g, e = lie._coef0(0.0, X, 0.0, 0.0, 0.0)
+    a, b, c, g, e = lie.coef0(0.0, X, 0.0, 0.0, 0.0)
     got = dict(a=a, b=b, c=c, e=e)
-    got.update(zip(["a1", "b1", "c1", "g1", "e1"], lie._coef1(0.0, X, 0.0, 0.0, 0.0)))
-    got.update(zip(["a2", "b2", "c2"], lie._coef2(0.0, X, 0.0, 0.0, 0.0)))
+    got.update(zip(["a1", "b1", "c1", "g1", "e1"], lie.coef1(0.0, X, 0.0, 0.0, 0.0)))
+    got.update(zip(["a2", "b2", "c2"], lie.coef2(0.0, X, 0.0, 0.0, 0.0)))
     for name, val in got.items():
         ref = trunc(name, 5 if name in "abce" else 9)
         assert abs(val - ref) <= 1e-13 * max(abs(ref), 1.0), name

@@ -14,7 +14,7 @@ import pytest
 from compliant_docking.controllers.observer import WRENCH_COLUMNS, MomentumObserver
 from compliant_docking.runner import execute
 from compliant_docking.simulate import prepare
-from conftest import make_cfg
+from conftest import make_cfg, push_at_tcp
 
 WRENCH = np.array([6.0, -4.0, 5.0, 0.3, -0.2, 0.1])  # [f; m] at the TCP, world axes
 RAMP_S = 0.5  # the push rises smoothly over this time
@@ -23,18 +23,30 @@ RAMP_S = 0.5  # the push rises smoothly over this time
 def push(sim, wrench, ramp_s=RAMP_S):
     """Wrap the controller so that every step first applies `wrench` (at the TCP, world
     axes, smoothly ramped in) to the tool body."""
-    data, body, tcp = sim.data, sim.scene.tool_body, sim.scene.tcp_site
     compute = sim.controller.compute
 
     def pushed(t, ref, measured):
         a = min(t / ramp_s, 1.0)
         w = a * a * (3.0 - 2.0 * a) * wrench
-        data.xfrc_applied[body, :3] = w[:3]
-        # xfrc_applied acts at the body's centre of mass: move the moment there
-        data.xfrc_applied[body, 3:] = w[3:] + np.cross(data.site_xpos[tcp] - data.xipos[body], w[:3])
+        push_at_tcp(sim, force=w[:3], moment=w[3:])
         return compute(t, ref, measured)
 
     sim.controller.compute = pushed
+
+
+def ride_along(sim) -> MomentumObserver:
+    """An observer fed by the run's controller, step by step (any controller can host one)."""
+    observer = MomentumObserver(sim.controller.ctx, kp=20.0, ki=40.0)
+    compute = sim.controller.compute
+
+    def observed(t, ref, measured):
+        observer.update(measured)
+        tau = compute(t, ref, measured)
+        observer.command(tau)
+        return tau
+
+    sim.controller.compute = observed
+    return observer
 
 
 def hold_cfg(robot, *overrides, seconds=6):
@@ -51,16 +63,7 @@ def test_observer_estimates_a_constant_push(robot):
     sticks it hides up to 1.14 N·m, which is why the arm must settle first."""
     sim = prepare(hold_cfg(robot, "controller.k=2000", "controller.d=280",
                            "controller.k_rot=200", "controller.d_rot=28"))
-    observer = MomentumObserver(sim.controller.ctx, kp=20.0, ki=40.0)
-    compute = sim.controller.compute
-
-    def observed(t, ref, measured):
-        observer.update(measured)
-        tau = compute(t, ref, measured)
-        observer.command(tau)
-        return tau
-
-    sim.controller.compute = observed
+    observer = ride_along(sim)
     push(sim, WRENCH)
     sim.run()
     last = slice(observer.count - 1000, observer.count)
@@ -76,16 +79,7 @@ def test_observer_sees_no_wrench_in_fast_free_motion():
     Pinocchio model is MuJoCo's)."""
     sim = prepare(make_cfg("robot=iiwa14", "trajectory.duration=1.0", "task.duration=0.6",
                            "task.progress=false"))
-    observer = MomentumObserver(sim.controller.ctx, kp=20.0, ki=40.0)
-    compute = sim.controller.compute
-
-    def observed(t, ref, measured):
-        observer.update(measured)
-        tau = compute(t, ref, measured)
-        observer.command(tau)
-        return tau
-
-    sim.controller.compute = observed
+    observer = ride_along(sim)
     sim.run()
     # really no contact (the sensor is no reference here: it also feels the tool's inertia)
     assert not sim.telemetry.contacts[:sim.telemetry.count].any()

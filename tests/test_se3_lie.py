@@ -26,7 +26,7 @@ from compliant_docking.config import FrictionComp
 from compliant_docking.controllers.se3_lie import SE3LieController
 from compliant_docking.runner import execute
 from compliant_docking.trajectories.base import Reference
-from conftest import make_cfg
+from conftest import make_cfg, push_at_tcp
 
 FREE_SPACE = ("controller=se3_lie", "target=none", "trajectory=hold",
               "task.init_pos=[0.55,0.0,0.35]", "task.settle_time=0.0", "task.progress=false")
@@ -222,17 +222,6 @@ def test_body_accelerations_by_finite_differences(formulation):
 
 
 # --------------------------------------------------------------------------- closed loop
-def push_at_tcp(sim, force=(0.0, 0.0, 0.0), moment=(0.0, 0.0, 0.0)) -> None:
-    """A constant wrench at the TCP through the tool body's xfrc_applied (which acts at the
-    body's centre of mass, hence the moment r × F)."""
-    data, scene = sim.data, sim.scene
-    mujoco.mj_forward(scene.model, data)
-    r = data.site_xpos[scene.tcp_site] - data.xipos[scene.tool_body]
-    force, moment = np.asarray(force, float), np.asarray(moment, float)
-    data.xfrc_applied[scene.tool_body, :3] = force
-    data.xfrc_applied[scene.tool_body, 3:] = moment + np.cross(r, force)
-
-
 def test_constant_push_settles_at_force_over_stiffness():
     """Anisotropic K (TCP axes): the displacement is R diag(1/k) Rᵀ F."""
     k = np.array([40.0, 60.0, 80.0])

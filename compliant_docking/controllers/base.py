@@ -53,15 +53,18 @@ class FrictionFeedForward:
         self.f = np.asarray(friction, dtype=float).copy()
         self.b = np.asarray(damping, dtype=float).copy()
         self.active = bool(np.any(self.f > 0.0) or np.any(self.b > 0.0))
-        self._f_safe = np.where(self.f > 0.0, self.f, 1.0)
+        self._torque_mode = self.mode is FrictionComp.torque
+        # the argument of tanh per unit of its input: 2/f (torque mode) or 1/0.01 (velocity)
+        self._scale = (2.0 / np.where(self.f > 0.0, self.f, 1.0) if self._torque_mode
+                       else np.full_like(self.f, 1.0 / self.VELOCITY_SCALE))
 
     def __call__(self, tau_pre: np.ndarray, v: np.ndarray) -> np.ndarray:
         """The feed-forward torque (callers may skip the call when ``active`` is False)."""
-        if self.mode is FrictionComp.torque:
-            dry = self.f * np.tanh(2.0 * tau_pre / self._f_safe)
-        else:
-            dry = self.f * np.tanh(v / self.VELOCITY_SCALE)
-        return dry + self.b * v
+        x = (tau_pre if self._torque_mode else v) * self._scale
+        np.tanh(x, out=x)
+        x *= self.f
+        x += self.b * v
+        return x
 
 
 class TaskInertia:

@@ -93,13 +93,10 @@ from scipy.linalg import cho_factor, cho_solve
 from compliant_docking import lie
 from compliant_docking.config import SE3Formulation as Formulation
 from compliant_docking.controllers.base import ControlContext, Controller, TaskInertia
-from compliant_docking.trajectories.base import Reference
-
 # lie.py's scalar kernels (log3 and the Taylor/closed-form coefficients), called directly
 # so that one evaluation of the coefficients serves both log6 and dexp⁻ᵀ.
-from compliant_docking.lie import (  # noqa: I001
-    _coef0, _coef1, _log3_list, _trig, PI_MARGIN, TAYLOR_THETA_0,
-)
+from compliant_docking.lie import PI_MARGIN, TAYLOR_THETA_0, coef0, coef1, log3_list, trig_terms
+from compliant_docking.trajectories.base import Reference
 
 _sqrt = math.sqrt
 _fromiter = np.fromiter
@@ -229,7 +226,7 @@ class SE3LieController(Controller):
         # R̃ = RᵀR_d has columns (c00, c01, c02), (c10, …), (c20, …); p̃ = Rᵀ(p_d − p) = e
 
         # --- λ = log6(T̃) = [J(w)⁻¹p̃; w], w = log3(R̃); refused at ‖w‖ ≥ π
-        w0, w1, w2, th = _log3_list(c00, c10, c20, c01, c11, c21, c02, c12, c22)
+        w0, w1, w2, th = log3_list(c00, c10, c20, c01, c11, c21, c02, c12, c22)
         if not th < _PI_LIMIT:
             try:
                 lie.check_rotation_domain((0.0, 0.0, 0.0, w0, w1, w2))
@@ -245,8 +242,8 @@ class SE3LieController(Controller):
                     f"impedance requires |λ_rot| < π (the pose-error logarithm is not unique at π)")
         self._w_prev = (w0, w1, w2)
         x = th * th
-        trig = _trig(th) if th >= TAYLOR_THETA_0 else (0.0, 0.0, 0.0)
-        _, _, _, g, e = _coef0(th, x, *trig)
+        trig = trig_terms(th) if th >= TAYLOR_THETA_0 else (0.0, 0.0, 0.0)
+        _, _, _, g, e = coef0(th, x, *trig)
         wp = w0 * e0 + w1 * e1 + w2 * e2
         l0 = g * e0 - 0.5 * (w1 * e2 - w2 * e1) + e * wp * w0
         l1 = g * e1 - 0.5 * (w2 * e0 - w0 * e2) + e * wp * w1
@@ -298,7 +295,7 @@ class SE3LieController(Controller):
             # --- V̇_ref = Ad(T̃)V̇_d + ad(Ṽ)V − A⁻¹(F̃ − D·Ṽ − dexp⁻ᵀKλ)
             # dexp⁻ᵀy = [J⁻ᵀy_v; Qiᵀy_v + J⁻ᵀy_w] with J⁻ᵀy = g y + ½ w×y + e w(w·y) and
             # Qiᵀy = g1 s y + ½ λ_v×y + e(λ_v(w·y) + w(λ_v·y)) + e1 s w(w·y), s = w·λ_v
-            _, _, _, g1, e1 = _coef1(th, x, *trig)
+            _, _, _, g1, e1 = coef1(th, x, *trig)
             kd = self._K_diag
             if kd is None:
                 y0, y1, y2, y3, y4, y5 = self.K.dot(lam).tolist()

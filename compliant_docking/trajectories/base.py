@@ -57,6 +57,14 @@ class ReferenceTable:
     twist: np.ndarray  # (N, 6) [vel; omega]
     accel: np.ndarray  # (N, 6) [acc; alpha]
 
+    @classmethod
+    def zeros(cls, t) -> "ReferenceTable":
+        """A table for the times ``t`` with every reference quantity zero (to be filled)."""
+        t = np.asarray(t, dtype=float)
+        n = len(t)
+        return cls(t=t, pos=np.zeros((n, 3)), rot=np.zeros((n, 3, 3)), twist=np.zeros((n, 6)),
+                   accel=np.zeros((n, 6)))
+
     def row(self, k: int, ref: Reference) -> Reference:
         """Point ``ref`` at row k (views, no copies); only pos, rot, twist, accel are set."""
         ref.pos, ref.rot, ref.twist, ref.accel = self.pos[k], self.rot[k], self.twist[k], self.accel[k]
@@ -90,10 +98,7 @@ class Trajectory(ABC):
 
     def table(self, t: np.ndarray) -> ReferenceTable:
         """The reference at every time of ``t`` (override to vectorise)."""
-        n = len(t)
-        out = ReferenceTable(t=np.asarray(t, dtype=float), pos=np.zeros((n, 3)),
-                             rot=np.zeros((n, 3, 3)), twist=np.zeros((n, 6)),
-                             accel=np.zeros((n, 6)))
+        out = ReferenceTable.zeros(t)
         ref = Reference()
         for k, tk in enumerate(out.t):
             self.sample(float(tk), ref)

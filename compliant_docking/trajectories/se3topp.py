@@ -242,10 +242,8 @@ class SE3ToppTrajectory(Trajectory):
                 for sc in self._screws if sc.name != "hold"]
 
     def table(self, t: np.ndarray) -> ReferenceTable:
-        t = np.asarray(t, dtype=float)
-        n = len(t)
-        pos, rot = np.zeros((n, 3)), np.zeros((n, 3, 3))
-        twist, accel = np.zeros((n, 6)), np.zeros((n, 6))
+        out = ReferenceTable.zeros(t)
+        t, pos, rot, twist, accel = out.t, out.pos, out.rot, out.twist, out.accel
         which = segment_index(t, self._starts)
         for i, sc in enumerate(self._screws):
             k = which == i
@@ -262,4 +260,4 @@ class SE3ToppTrajectory(Trajectory):
             w_world = sc.rot_a @ xi_w
             twist[k, 3:] = np.outer(ds, w_world)
             accel[k, 3:] = np.outer(dds, w_world)
-        return ReferenceTable(t=t, pos=pos, rot=rot, twist=twist, accel=accel)
+        return out

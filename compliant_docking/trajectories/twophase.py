@@ -139,10 +139,8 @@ class TwoPhaseTrajectory(Trajectory):
         return list(self._segments)
 
     def table(self, t: np.ndarray) -> ReferenceTable:
-        t = np.asarray(t, dtype=float)
-        n = len(t)
-        pos, rot = np.zeros((n, 3)), np.zeros((n, 3, 3))
-        twist, accel = np.zeros((n, 6)), np.zeros((n, 6))
+        out = ReferenceTable.zeros(t)
+        t, pos, rot, twist, accel = out.t, out.pos, out.rot, out.twist, out.accel
         which = segment_index(t, self._starts)
         for i, (t0, T, p_a, delta, rot_a, axis, angle) in enumerate(self._rows):
             k = which == i
@@ -157,4 +155,4 @@ class TwoPhaseTrajectory(Trajectory):
             w_world = rot_a @ axis * angle  # ω = R_a φ ṡ, constant direction
             twist[k, 3:] = np.outer(ds, w_world)
             accel[k, 3:] = np.outer(dds, w_world)
-        return ReferenceTable(t=t, pos=pos, rot=rot, twist=twist, accel=accel)
+        return out
