@@ -38,6 +38,10 @@ Examples:
   python -m compliant_docking controller=hqp robot=fr3
   python -m compliant_docking physics=earth controller.k=100
   python -m compliant_docking -m controller=impedance,hqp,se3_lie robot=iiwa14,fr3
+  python -m compliant_docking -m +experiment=controller_comparison    (presets: conf/experiment)
+  python -m compliant_docking -m <same overrides> resume=last          (finish an interrupted sweep)
+  python -m compliant_docking -m <overrides> hydra/launcher=submitit_slurm hydra.launcher.partition=P
+  python -m compliant_docking.report runs/multirun/<date>/<time>      (tables and figures again)
 
 Exit status: 0 success, 1 the run failed (error, divergence), 3 the run's gate did not pass.
 Hydra's own options: --hydra-help, --cfg job (print the composed config), --info.

@@ -32,6 +32,8 @@ import numpy as np
 import pandas as pd
 import yaml
 
+from compliant_docking.files import atomic_write
+
 METRICS_FILE = "metrics.json"
 HYDRA_DIR = ".hydra"
 OVERRIDES_FILE = "overrides.yaml"
@@ -439,12 +441,6 @@ def arrow_safe(df: pd.DataFrame) -> pd.DataFrame:
     return out
 
 
-def _atomic(path: Path, write) -> None:
-    tmp = path.with_name(f".{path.name}.tmp")
-    write(tmp)
-    os.replace(tmp, path)
-
-
 def write_summary(df: pd.DataFrame, out_dir: str | os.PathLike, *, title: str | None = None,
                   unfinished: list[Path] | None = None) -> dict[str, Path]:
     """Write summary.parquet, summary.csv (one row per job), comparison.csv and summary.md.
@@ -456,12 +452,12 @@ def write_summary(df: pd.DataFrame, out_dir: str | os.PathLike, *, title: str | 
     title = title or f"Runs in {out.name}"
     paths = {name: out / name for name in SUMMARY_FILES}
     safe = arrow_safe(df)
-    _atomic(paths["summary.parquet"], lambda p: safe.to_parquet(p, index=False))
-    _atomic(paths["summary.csv"], lambda p: df.to_csv(p, index=False))
+    atomic_write(paths["summary.parquet"], lambda p: safe.to_parquet(p, index=False))
+    atomic_write(paths["summary.csv"], lambda p: df.to_csv(p, index=False))
     table = comparison_table(df) if len(df) else pd.DataFrame()
-    _atomic(paths["comparison.csv"], lambda p: table.to_csv(p))
+    atomic_write(paths["comparison.csv"], lambda p: table.to_csv(p))
     text = summary_markdown(df, title, unfinished)
-    _atomic(paths["summary.md"], lambda p: p.write_text(text + "\n", encoding="utf-8"))
+    atomic_write(paths["summary.md"], lambda p: p.write_text(text + "\n", encoding="utf-8"))
     return paths
 
 

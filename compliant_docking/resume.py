@@ -31,11 +31,12 @@ launchers, jobs outlive an interrupted launching process: ``squeue`` / ``ps``).
 
 from __future__ import annotations
 
-import os
 import re
 import shutil
 import sys
 from pathlib import Path
+
+from compliant_docking.files import atomic_write_text
 
 #: the job's return value when :func:`finished_record` kept it (seen by the sweep callback)
 SKIPPED = "skipped: finished earlier with the same config"
@@ -248,9 +249,7 @@ def write_hydra_dir(cfg, out_dir: Path) -> None:
     folder.mkdir(parents=True, exist_ok=True)
     for name, node in (("config.yaml", cfg), ("hydra.yaml", hydra_node),
                        ("overrides.yaml", hydra_node.hydra.overrides.task)):
-        tmp = folder / f".{name}.tmp"
-        tmp.write_text(OmegaConf.to_yaml(node), encoding="utf-8")
-        os.replace(tmp, folder / name)
+        atomic_write_text(folder / name, OmegaConf.to_yaml(node))
 
 
 def fail(exc: ResumeError) -> int:

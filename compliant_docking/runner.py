@@ -22,6 +22,7 @@ import numpy as np
 from omegaconf import DictConfig, OmegaConf
 
 from compliant_docking import provenance
+from compliant_docking.files import atomic_write, atomic_write_text
 from compliant_docking.metrics import DockingMetrics, finite_or_none
 from compliant_docking.misalignment import record_for as misalignment_record
 
@@ -32,12 +33,6 @@ FIGURES_DIR = "figures"
 
 #: exit status of ``python -m compliant_docking``
 EXIT_SUCCESS, EXIT_FAILED, EXIT_GATE = 0, 1, 3
-
-
-def atomic_write_text(path: Path, text: str) -> None:
-    tmp = path.with_name(f".{path.name}.tmp")
-    tmp.write_text(text, encoding="utf-8")
-    os.replace(tmp, path)
 
 
 def write_metrics(path: Path, record: dict) -> None:
@@ -157,7 +152,8 @@ def _evaluate(sim, out_dir: Path, *, figures: bool) -> dict:
     result["success"] = (complete and not failures) if gated else None
     result["gate_failures"] = "; ".join(failures) or None
 
-    _atomic_parquet(ts, out_dir / TIMESERIES_FILE)
+    atomic_write(out_dir / TIMESERIES_FILE,
+                 lambda tmp: ts.to_parquet(tmp, index=False, compression="zstd"))
     if figures:
         from compliant_docking.plotting import plot_run
 
@@ -169,12 +165,6 @@ def _evaluate(sim, out_dir: Path, *, figures: bool) -> dict:
         shutil.rmtree(final, ignore_errors=True)
         os.replace(tmp, final)
     return result
-
-
-def _atomic_parquet(frame, path: Path) -> None:
-    tmp = path.with_name(f".{path.name}.tmp")
-    frame.to_parquet(tmp, index=False, compression="zstd")
-    os.replace(tmp, path)
 
 
 # --------------------------------------------------------------------------- summary

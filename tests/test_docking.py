@@ -1,7 +1,6 @@
 """End to end: the default scene docks, the run directory is complete, failures are clean."""
 
 import json
-from pathlib import Path
 
 import numpy as np
 import pandas as pd

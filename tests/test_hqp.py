@@ -9,7 +9,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import pinocchio as pin
 import pytest
 from hydra.utils import instantiate
 
@@ -152,7 +151,7 @@ def test_singularity_direction_climbs_w_only_with_the_inertia_metric():
     reversed_euclidean, checked = 0, 0
     while checked < 300:
         arm.update(rng.uniform(arm.q_lower, arm.q_upper), np.zeros(arm.nv))
-        J, M, Minv = arm.J, arm.M, arm.Minv
+        J, Minv = arm.J, arm.Minv
         w = math.sqrt(np.linalg.det(J @ J.T))
         if w >= 0.08:
             continue

@@ -27,15 +27,18 @@ def test_constant_push_settles_at_force_over_stiffness(physics):
     assert np.linalg.norm(pin.log3(start.rotation.T @ end.rotation)) < 1e-3
 
 
-def test_constant_moment_settles_at_moment_over_rotational_stiffness():
-    sim = prepare(make_cfg(*FREE_SPACE, "trajectory.duration=4"))
+@pytest.mark.parametrize("controller", ["impedance", "se3_lie"])
+def test_constant_moment_settles_at_moment_over_rotational_stiffness(controller):
+    sim = prepare(make_cfg(*FREE_SPACE, "trajectory.duration=4", f"controller={controller}"))
+    gains = sim.cfg.controller
+    k_rot = float(gains.k_rot) if controller == "impedance" else float(gains.K_diag[3])
     start = sim.scene.arm.tcp_placement(sim.q0)
     moment = np.array([0.3, 0.2, -0.4])
     push_at_tcp(sim, moment=moment)
     sim.run()
     end = sim.scene.arm.tcp_placement(sim.data.qpos)
     rotation = pin.log3(end.rotation @ start.rotation.T)  # world axes
-    expected = moment / float(sim.cfg.controller.k_rot)
+    expected = moment / k_rot
     assert np.linalg.norm(rotation - expected) < 0.03 * np.linalg.norm(expected)
     assert np.linalg.norm(end.translation - start.translation) < 1e-4
 

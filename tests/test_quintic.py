@@ -40,7 +40,8 @@ def test_velocity_and_acceleration_are_derivatives():
     traj, _, _ = make()
     t = np.linspace(0.5, 14.5, 2001)
     h = 1e-5
-    p, v, a = traj.table(t).pos, traj.table(t).twist[:, :3], traj.table(t).accel[:, :3]
+    table = traj.table(t)
+    v, a = table.twist[:, :3], table.accel[:, :3]
     dp = (traj.table(t + h).pos - traj.table(t - h).pos) / (2 * h)
     dv = (traj.table(t + h).twist[:, :3] - traj.table(t - h).twist[:, :3]) / (2 * h)
     assert np.abs(dp - v).max() < 1e-8

@@ -239,19 +239,6 @@ def test_constant_push_settles_at_force_over_stiffness():
     assert np.linalg.norm(pin.log3(start.rotation.T @ end.rotation)) < 1e-3
 
 
-def test_constant_moment_settles_at_moment_over_rotational_stiffness():
-    sim = simulate.prepare(make_cfg(*FREE_SPACE, "trajectory.duration=4"))
-    start = sim.scene.arm.tcp_placement(sim.q0)
-    moment = np.array([0.3, 0.2, -0.4])
-    push_at_tcp(sim, moment=moment)
-    sim.run()
-    end = sim.scene.arm.tcp_placement(sim.data.qpos)
-    rotation = pin.log3(end.rotation @ start.rotation.T)  # world axes
-    expected = moment / 25.0
-    assert np.linalg.norm(rotation - expected) < 0.03 * np.linalg.norm(expected)
-    assert np.linalg.norm(end.translation - start.translation) < 1e-4
-
-
 def test_without_force_feedback_the_push_test_fails():
     """Feedback off: the arm's own inertia replaces A, F/k no longer holds (the push
     test above can fail)."""

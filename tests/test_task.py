@@ -1,7 +1,6 @@
 """The task geometry: start and goal poses, the press after the motion, the run length."""
 
 import numpy as np
-import pinocchio as pin
 import pytest
 
 from compliant_docking.runner import execute

@@ -13,8 +13,7 @@ from compliant_docking import CONF_DIR
 from compliant_docking.config import TrackingThresholds
 from compliant_docking.runner import execute, format_summary, write_metrics
 from compliant_docking.tracking_gate import (FAIL, INCOMPLETE, PASS, compute_tracking_metrics,
-                                             evaluate_tracking_gate, format_tracking_gate,
-                                             tracking_gate)
+                                             format_tracking_gate, tracking_gate)
 from conftest import make_cfg, run_cli
 
 SEGMENTS = [("transition_1", 0.0, 1.5), ("circle", 1.5, 6.5), ("transition_2", 6.5, 8.0),

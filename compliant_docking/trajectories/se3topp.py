@@ -37,7 +37,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-import pinocchio as pin
 from scipy.optimize import minimize_scalar
 
 from compliant_docking import lie
