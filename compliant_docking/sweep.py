@@ -197,15 +197,25 @@ def _display(path: Path) -> str:
         return str(path)
 
 
-def finished_count(sweep_dir: Path, depth: int = 1) -> int:
-    """Job directories ``depth`` levels below ``sweep_dir`` that hold a metrics.json."""
-    return sum(1 for _ in Path(sweep_dir).glob("*/" * depth + "metrics.json"))
+def finished_rank(out_dir: Path, sweep_dir: Path, depth: int = 1) -> int:
+    """The job's place among the finished jobs of the sweep: how many metrics.json files
+    ``depth`` levels below ``sweep_dir`` were written no later than its own (by
+    modification time, then path). Unlike a plain count, two workers finishing at the
+    same moment still get different numbers."""
+    def key(path: Path) -> tuple[int, str]:
+        try:
+            return path.stat().st_mtime_ns, str(path)
+        except OSError:  # replaced while we looked
+            return 0, str(path)
+
+    own = key(Path(out_dir) / "metrics.json")
+    return sum(1 for p in Path(sweep_dir).glob("*/" * depth + "metrics.json") if key(p) <= own)
 
 
 def job_line(out_dir: Path, sweep_dir: Path, total: int | None, done: int | None = None) -> str:
     """``[3/6] 2_controller=hqp,robot=fr3 · ok · docked · peak 12.3 N · 4.2 s``.
 
-    ``done``: the running count; by default the finished metrics.json files now.
+    ``done``: the running count; by default the job's rank among the finished jobs.
     """
     from compliant_docking.results import read_metrics
 
@@ -215,7 +225,7 @@ def job_line(out_dir: Path, sweep_dir: Path, total: int | None, done: int | None
     except ValueError:
         depth = 1
     if done is None:
-        done = finished_count(sweep_dir, depth)
+        done = finished_rank(out_dir, sweep_dir, depth)
     count = f"[{done}/{total}]" if total else f"[{done} done]"
     if record is None:
         return f"{count} {out_dir.name} · {problem}"

@@ -161,3 +161,18 @@ def test_job_line_and_exit_status(tmp_path):
     assert SweepOutcome(failed=0, aborted=False, **outcome).exit_status == 0  # not docked ≠ failed
     assert SweepOutcome(failed=1, aborted=False, **outcome).exit_status == 1
     assert SweepOutcome(failed=0, aborted=True, **outcome).exit_status == 1
+
+
+def test_jobs_finishing_together_get_distinct_progress_counts(tmp_path):
+    """Two workers can finish before either counts: each job's number is its rank among the
+    finished jobs (by write time, then name), not the number of files seen, so the lines
+    still read [1/3] and [2/3] instead of [2/3] twice."""
+    from compliant_docking.sweep import job_line
+
+    for i, name in enumerate(("0_a", "1_b")):
+        job = tmp_path / name
+        job.mkdir()
+        (job / "metrics.json").write_text(json.dumps({"status": "ok", "success": True}))
+        os.utime(job / "metrics.json", ns=(10**18 + i, 10**18 + i))
+    lines = [job_line(tmp_path / name, tmp_path.resolve(), 3) for name in ("1_b", "0_a")]
+    assert [line[:6] for line in lines] == ["[2/3] ", "[1/3] "]
