@@ -24,6 +24,7 @@ from matplotlib.ticker import MaxNLocator
 
 from compliant_docking.plotting import apply_style, envelope
 from compliant_docking.results import TABLE10, configuration_keys, configuration_labels
+from compliant_docking.telemetry import FORCE, axial_force
 
 #: metrics drawn by :func:`metric_bars`, by section (keys of results.TABLE10, plus success)
 BAR_SECTIONS = ("contact safety", "internal safety", "tracking accuracy")
@@ -254,10 +255,10 @@ def force_overlay(df: pd.DataFrame, out_dir: str | Path | None = None, *,
         path = Path(row["run_dir"]) / "timeseries.parquet"
         if not path.is_file():
             continue
-        ts = pd.read_parquet(path, columns=["t", "fx", "fy", "fz"])
+        ts = pd.read_parquet(path, columns=["t", *FORCE])
         axis = _docking_axis(Path(row["run_dir"]))
-        force = ts[["fx", "fy", "fz"]].to_numpy()
-        axial = -(force @ axis) if axis is not None else np.linalg.norm(force, axis=1)
+        force = ts[FORCE].to_numpy()
+        axial = axial_force(force, axis) if axis is not None else np.linalg.norm(force, axis=1)
         traces.append((labels.get(index, row["job"]), ts["t"].to_numpy(), axial))
     if not traces:
         return None

@@ -20,9 +20,9 @@ import numpy as np
 import pandas as pd
 import pinocchio as pin
 
-FORCE = ["fx", "fy", "fz"]
-WRENCH = ["fx", "fy", "fz", "mx", "my", "mz"]
-ORI_ERROR = ["ori_error_x", "ori_error_y", "ori_error_z"]
+from compliant_docking.telemetry import (FORCE, ORI_ERROR, POSITION, POSITION_REF, QUATERNION,
+                                         WRENCH, axial_force)
+
 
 
 @dataclass(frozen=True)
@@ -79,8 +79,7 @@ def compute_metrics(ts: pd.DataFrame, *, axis: np.ndarray, q_lower: np.ndarray,
     steady = steady_mask(t, steady_window)
     nv = len(q_lower)
 
-    force = ts[FORCE].to_numpy()
-    axial = -(force @ axis)
+    axial = axial_force(ts[FORCE].to_numpy(), axis)
     wrench_norm = np.linalg.norm(ts[WRENCH].to_numpy(), axis=1)
 
     q = ts[[f"q{i + 1}" for i in range(nv)]].to_numpy()
@@ -88,7 +87,7 @@ def compute_metrics(ts: pd.DataFrame, *, axis: np.ndarray, q_lower: np.ndarray,
     pos_pct, pos_joint = _max_pct(np.abs(q - (q_upper + q_lower) / 2), (q_upper - q_lower) / 2)
     vel_pct, vel_joint = _max_pct(np.abs(v), np.asarray(velocity_limits, dtype=float))
 
-    pos_err = ts[["x", "y", "z"]].to_numpy() - ts[["x_ref", "y_ref", "z_ref"]].to_numpy()
+    pos_err = ts[POSITION].to_numpy() - ts[POSITION_REF].to_numpy()
     lateral = pos_err - np.outer(pos_err @ axis, axis)
     ori_norm = np.linalg.norm(ts[ORI_ERROR].to_numpy(), axis=1)
 
@@ -147,8 +146,8 @@ def seat_state(ts: pd.DataFrame, seat: pin.SE3, steady_window: float,
         return SeatState(None, None, None, None)
     t = ts["t"].to_numpy()
     steady = steady_mask(t, steady_window)
-    rel = (ts[["x", "y", "z"]].to_numpy() - seat.translation) @ seat.rotation  # seat frame
-    quat = ts[["qw", "qx", "qy", "qz"]].to_numpy()
+    rel = (ts[POSITION].to_numpy() - seat.translation) @ seat.rotation  # seat frame
+    quat = ts[QUATERNION].to_numpy()
     plug_axis = _quat_z_axis(quat)
     # inserted plug: its +z is the socket's −z
     cos_tilt = np.clip(-(plug_axis @ seat.rotation[:, 2]), -1.0, 1.0)

@@ -12,6 +12,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from compliant_docking.telemetry import FORCE, MOMENT, ORI_ERROR, axial_force
+
 MAX_POINTS = 1200
 PNG_DPI = 200
 
@@ -82,7 +84,7 @@ def plot_run(ts: pd.DataFrame, out_dir: Path, *, axis: np.ndarray, torque_limits
     fig, axes = plt.subplots(2, 1, sharex=True, figsize=(3.5, 2.8), constrained_layout=True)
     axes[0].semilogy(*envelope(t, np.clip(ts["pos_error"].to_numpy() * 1e3, 1e-6, None)))
     axes[0].set_ylabel("position error [mm]")
-    ori = np.degrees(np.linalg.norm(ts[["ori_error_x", "ori_error_y", "ori_error_z"]].to_numpy(), axis=1))
+    ori = np.degrees(np.linalg.norm(ts[ORI_ERROR].to_numpy(), axis=1))
     axes[1].plot(*envelope(t, ori))
     axes[1].set_ylabel("orientation error [deg]")
     axes[1].set_xlabel("time [s]")
@@ -90,14 +92,15 @@ def plot_run(ts: pd.DataFrame, out_dir: Path, *, axis: np.ndarray, torque_limits
 
     # 3. contact force and wrench
     axis = np.asarray(axis, dtype=float) / np.linalg.norm(axis)
-    axial = -(ts[["fx", "fy", "fz"]].to_numpy() @ axis)
-    lateral = np.linalg.norm(ts[["fx", "fy", "fz"]].to_numpy() + np.outer(axial, axis), axis=1)
+    force = ts[FORCE].to_numpy()
+    axial = axial_force(force, axis)
+    lateral = np.linalg.norm(force + np.outer(axial, axis), axis=1)
     fig, axes = plt.subplots(2, 1, sharex=True, figsize=(3.5, 2.8), constrained_layout=True)
     axes[0].plot(*envelope(t, axial), label="axial (pressing +)")
     axes[0].plot(*envelope(t, lateral), label="lateral")
     axes[0].set_ylabel("contact force [N]")
     axes[0].legend(loc="best")
-    axes[1].plot(*envelope(t, np.linalg.norm(ts[["mx", "my", "mz"]].to_numpy(), axis=1)))
+    axes[1].plot(*envelope(t, np.linalg.norm(ts[MOMENT].to_numpy(), axis=1)))
     axes[1].set_ylabel("contact moment [N m]")
     axes[1].set_xlabel("time [s]")
     save(fig, "contact_force")

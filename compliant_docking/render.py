@@ -38,6 +38,7 @@ import mujoco
 import numpy as np
 
 from compliant_docking import gl
+from compliant_docking.telemetry import axial_force
 
 VIDEO_FILE = "docking.mp4"
 #: elevation of the close-up camera (below the horizon: looking down) [deg]
@@ -96,14 +97,13 @@ def record_video(sim, cfg, out_dir: Path) -> dict:
         tel = sim.telemetry
         n = tel.count
         force = tel.wrench[:n, :3]
-        axis = np.asarray(sim.waypoints.axis, dtype=float)
         budget = None
         if sim.scene.socket is not None and cfg.task.get("gate") is not None:
             budget = float(cfg.task.gate.peak_force_budget_N)
         title = " · ".join(str(cfg[g].name) for g in ("robot", "controller", "trajectory"))
         result = write_video(
             sim.scene.model, tel.q[:n], float(tel.dt), Path(out_dir) / VIDEO_FILE, cfg.render,
-            axial_force=-(force @ axis), force_norm=np.linalg.norm(force, axis=1),
+            axial_force=axial_force(force, sim.waypoints.axis), force_norm=np.linalg.norm(force, axis=1),
             contacts=tel.contacts[:n], focus=_closeup_focus(sim, cfg),
             tool_body=int(sim.scene.tool_body), force_budget=budget, title=title)
         record.update(video=result.path.name, video_frames=result.frames,

@@ -1,21 +1,46 @@
 """Per-step records of a run: preallocated in the loop, expanded and written once at the end.
 
 The hot loop stores only what cannot be recomputed (q, v, torque command, measured
-wrench, contact count, and any per-step signals a controller declares). Everything derivable (TCP pose and twist from q, v; the reference from the
-planner) is reconstructed after the loop, so recording costs a few row copies per step.
+wrench, contact count, and any per-step signals a controller declares). Everything
+derivable (TCP pose and twist from q, v; the reference from the planner) is
+reconstructed after the loop, so recording costs a few row copies per step.
 
 The time series is saved as ``timeseries.parquet``; the columns are documented in
-docs/run_directory.md and listed by :data:`COLUMN_DOCS`.
+docs/run_directory.md and listed by :data:`COLUMN_DOCS`. The column groups below are
+the one place their names are written: readers (metrics, gates, figures) use them.
+This module imports Pinocchio only inside :meth:`Telemetry.frame`, so readers stay light.
 """
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 import pandas as pd
-import pinocchio as pin
 
-from compliant_docking.models import ArmModel
-from compliant_docking.trajectories.base import ReferenceTable
+if TYPE_CHECKING:
+    from compliant_docking.models import ArmModel
+    from compliant_docking.trajectories.base import ReferenceTable
+
+#: column groups of the time series
+POSITION = ["x", "y", "z"]
+QUATERNION = ["qw", "qx", "qy", "qz"]
+TWIST = ["vx", "vy", "vz", "wx", "wy", "wz"]
+POSITION_REF = [f"{c}_ref" for c in POSITION]
+QUATERNION_REF = [f"{c}_ref" for c in QUATERNION]
+TWIST_REF = [f"{c}_ref" for c in TWIST]
+ORI_ERROR = ["ori_error_x", "ori_error_y", "ori_error_z"]
+FORCE = ["fx", "fy", "fz"]
+MOMENT = ["mx", "my", "mz"]
+WRENCH = [*FORCE, *MOMENT]
+
+
+def axial_force(force: np.ndarray, axis: np.ndarray) -> np.ndarray:
+    """Per step, −f·axis [N]: the measured force ON the tool (rows of ``force``, world axes)
+    along the docking axis (normalised here), positive when the plug presses into the
+    socket. The one definition behind the metrics, the figures and the video."""
+    axis = np.asarray(axis, dtype=float)
+    return -(np.asarray(force, dtype=float) @ (axis / np.linalg.norm(axis)))
 
 COLUMN_DOCS = {
     "t": "time [s]",
@@ -66,6 +91,8 @@ class Telemetry:
     def frame(self, arm: ArmModel, reference: ReferenceTable, torque_limits: np.ndarray,
               extras: dict[str, np.ndarray] | None = None) -> pd.DataFrame:
         """The recorded steps as one DataFrame, with the derived columns filled in."""
+        import pinocchio as pin
+
         n, nv = self.count, self.q.shape[1]
         t = self.time
         model = arm.model
@@ -88,15 +115,15 @@ class Telemetry:
         for name, block in (("q", self.q), ("v", self.v), ("tau", tau)):
             for i in range(nv):
                 columns[f"{name}{i + 1}"] = block[:n, i]
-        _put(columns, ("x", "y", "z"), pos)
-        _put(columns, ("qw", "qx", "qy", "qz"), quat)
-        _put(columns, ("vx", "vy", "vz", "wx", "wy", "wz"), twist)
-        _put(columns, ("x_ref", "y_ref", "z_ref"), ref_pos)
-        _put(columns, ("qw_ref", "qx_ref", "qy_ref", "qz_ref"), ref_quat)
-        _put(columns, ("vx_ref", "vy_ref", "vz_ref", "wx_ref", "wy_ref", "wz_ref"), ref_twist)
+        _put(columns, POSITION, pos)
+        _put(columns, QUATERNION, quat)
+        _put(columns, TWIST, twist)
+        _put(columns, POSITION_REF, ref_pos)
+        _put(columns, QUATERNION_REF, ref_quat)
+        _put(columns, TWIST_REF, ref_twist)
         columns["pos_error"] = np.linalg.norm(pos - ref_pos, axis=1)
-        _put(columns, ("ori_error_x", "ori_error_y", "ori_error_z"), ori_err)
-        _put(columns, ("fx", "fy", "fz", "mx", "my", "mz"), self.wrench[:n])
+        _put(columns, ORI_ERROR, ori_err)
+        _put(columns, WRENCH, self.wrench[:n])
         columns["contacts"] = self.contacts[:n]
         columns["torque_saturated"] = saturated
         for name, values in (extras or {}).items():
@@ -109,11 +136,13 @@ class Telemetry:
         return pd.DataFrame(columns)
 
 
-def _put(columns: dict, names: tuple[str, ...], block: np.ndarray) -> None:
+def _put(columns: dict, names: list[str], block: np.ndarray) -> None:
     for i, name in enumerate(names):
         columns[name] = block[:, i]
 
 
 def _wxyz(rot: np.ndarray) -> np.ndarray:
+    import pinocchio as pin
+
     x, y, z, w = pin.Quaternion(rot).coeffs()
     return np.array([w, x, y, z])

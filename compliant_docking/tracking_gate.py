@@ -31,8 +31,9 @@ from typing import Sequence
 import numpy as np
 import pandas as pd
 
+from compliant_docking.telemetry import ORI_ERROR
+
 PASS, FAIL, INCOMPLETE = "PASS", "FAIL", "INCOMPLETE"
-ORI_ERROR = ["ori_error_x", "ori_error_y", "ori_error_z"]
 #: segments the thresholds name (threshold field → segment name)
 GATED_SEGMENTS = {"circle_position_rms_m": "circle", "figure8_position_rms_m": "figure8"}
 #: fields of a threshold object the gate reads

@@ -46,12 +46,11 @@ from __future__ import annotations
 import numpy as np
 from scipy.linalg import lapack
 
-from compliant_docking.controllers.base import ControlContext
+from compliant_docking.config import FrictionComp
+from compliant_docking.controllers.base import ControlContext, FrictionFeedForward
 
 _dposv = lapack.dposv
 
-#: velocity scale of the smooth sign in the friction model [rad/s]
-FRICTION_VELOCITY_SCALE = 0.01
 #: default clamp of the integral term K_i ∫e per joint, as a multiple of the torque clip
 INTEGRAL_LIMIT_FACTOR = 10.0
 #: default window at the end of the run for the steady-state error (the metrics' default) [s]
@@ -98,9 +97,10 @@ class MomentumObserver:
         self._M_prev = np.zeros((n, n))
         self._h_prev = np.zeros(n)
         self._tau_applied = np.zeros(n)  # clipped command of the previous step
-        self.friction = np.asarray(context.joint_friction, dtype=float).copy()
-        self.damping = np.asarray(context.joint_damping, dtype=float).copy()
-        self._has_friction = bool(np.any(self.friction > 0.0) or np.any(self.damping > 0.0))
+        # the friction acting on the joints, f·tanh(v/0.01) + b·v: the shared model in
+        # velocity mode (whatever mode the host controller's feed-forward uses)
+        self._joint_friction = FrictionFeedForward(context.joint_friction, context.joint_damping,
+                                                   FrictionComp.velocity)
         self._started = False
         n_steps = int(context.n_steps)
         self.estimates = np.zeros((n_steps, 6))
@@ -135,9 +135,8 @@ class MomentumObserver:
             self._started = True
         self._M_prev[:] = M
         self._h_prev[:] = arm.h
-        if self._has_friction:  # τ̂_ext = r − τ̂_f = r + f·tanh(v/v_s) + b·v
-            np.add(self.r, self.friction * np.tanh(v / FRICTION_VELOCITY_SCALE), out=self.tau_ext)
-            self.tau_ext += self.damping * v
+        if self._joint_friction.active:  # τ̂_ext = r − τ̂_f = r + f·tanh(v/v_s) + b·v
+            np.add(self.r, self._joint_friction(v, v), out=self.tau_ext)
         else:
             self.tau_ext[:] = self.r
         self._joint_to_wrench(arm.J)
