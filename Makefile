@@ -8,7 +8,7 @@ VENV   ?= .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: run test test-slow test-all benchmark setup gl clean
+.PHONY: run test test-slow test-all lint benchmark setup gl clean
 
 setup: $(STAMP)
 
@@ -24,6 +24,12 @@ run: $(STAMP) gl
 
 test: $(STAMP) gl
 	$(PY) -m pytest -q $(PYTEST_ARGS)
+
+# ruff (lint and format) and mypy, configured in pyproject.toml; CI runs this before the tests
+lint: $(STAMP)
+	$(VENV)/bin/ruff check compliant_docking tests benchmarks
+	$(VENV)/bin/ruff format --check compliant_docking tests benchmarks
+	$(VENV)/bin/mypy
 
 test-slow: $(STAMP) gl
 	$(PY) -m pytest -q -m slow $(PYTEST_ARGS)

@@ -37,29 +37,28 @@ import numpy as np
 if __package__ in (None, ""):
     sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from compliant_docking.geometry import (  # noqa: E402
-    ALL_SOCKET_BITS,
+from compliant_docking.config.geometry import (  # noqa: E402
     ContactParams,
     PlugGeometry,
     SocketGeometry,
-    build_plug,
-    build_socket,
 )
+from compliant_docking.sim.geometry import build_plug, build_socket  # noqa: E402
+from compliant_docking.sim.geometry.collision import ALL_SOCKET_BITS  # noqa: E402
 
-TIMESTEP = 0.001          # [s]
-SEAT_TOLERANCE = 0.0005   # tip within 0.5 mm (axially) of the seat counts as seated [m]
-START_GAP = 0.002         # the tip starts this far above the mouth [m]
+TIMESTEP = 0.001  # [s]
+SEAT_TOLERANCE = 0.0005  # tip within 0.5 mm (axially) of the seat counts as seated [m]
+START_GAP = 0.002  # the tip starts this far above the mouth [m]
 
 
 @dataclass(frozen=True)
 class Compliance:
     """Springs and dampers of the rig's carrier joints, per joint (SI units)."""
 
-    lateral_stiffness: float = 100.0     # N/m, slides x and y
-    lateral_damping: float = 10.0        # N s/m
-    approach_speed: float = 0.05         # m/s; axial damping = push / approach_speed
-    rotational_stiffness: float = 0.5    # N m/rad, hinges x, y, z
-    rotational_damping: float = 0.02     # N m s/rad
+    lateral_stiffness: float = 100.0  # N/m, slides x and y
+    lateral_damping: float = 10.0  # N s/m
+    approach_speed: float = 0.05  # m/s; axial damping = push / approach_speed
+    rotational_stiffness: float = 0.5  # N m/rad, hinges x, y, z
+    rotational_damping: float = 0.02  # N m s/rad
 
 
 @dataclass(frozen=True)
@@ -79,13 +78,13 @@ class InsertionResult:
 
     seated: bool
     jammed: bool
-    seat_time: float | None          # sim time at which the tip first seated
-    final_tip_height: float          # tip height above the seat at the end
-    min_contact_dist: float          # most negative contact distance seen
-    steady_contact_dist: float       # mean per-step minimum distance after seating
+    seat_time: float | None  # sim time at which the tip first seated
+    final_tip_height: float  # tip height above the seat at the end
+    min_contact_dist: float  # most negative contact distance seen
+    steady_contact_dist: float  # mean per-step minimum distance after seating
     contact_steps: int
-    us_per_step: float               # wall time of mj_step per contact step [us]
-    collision_us_per_step: float     # MuJoCo's collision timer per contact step [us]
+    us_per_step: float  # wall time of mj_step per contact step [us]
+    collision_us_per_step: float  # MuJoCo's collision timer per contact step [us]
     max_contacts: int
 
 
@@ -110,9 +109,15 @@ def _plug_orientation(tilt_deg: float) -> np.ndarray:
     return quat
 
 
-def build_rig(plug: PlugGeometry, socket: SocketGeometry, contact: ContactParams, case: Case,
-              *, plug_collision: str = "cylinder_tip",
-              compliance: Compliance = Compliance()) -> Rig:
+def build_rig(
+    plug: PlugGeometry,
+    socket: SocketGeometry,
+    contact: ContactParams,
+    case: Case,
+    *,
+    plug_collision: str = "cylinder_tip",
+    compliance: Compliance = Compliance(),
+) -> Rig:
     """Compile the insertion rig for ``case``.
 
     World frame = socket frame.  The plug tip starts ``START_GAP`` above the mouth and
@@ -126,8 +131,7 @@ def build_rig(plug: PlugGeometry, socket: SocketGeometry, contact: ContactParams
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
     spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
     spec.option.gravity = [0.0, 0.0, 0.0]
-    spec.worldbody.add_frame().attach_body(build_socket(socket, contact).body("dock"),
-                                           prefix="target_")
+    spec.worldbody.add_frame().attach_body(build_socket(socket, contact).body("dock"), prefix="target_")
 
     quat = _plug_orientation(case.tilt_deg)
     rot = np.zeros(9)
@@ -143,29 +147,40 @@ def build_rig(plug: PlugGeometry, socket: SocketGeometry, contact: ContactParams
         axis = [0.0, 0.0, 0.0]
         axis[i] = 1.0
         axial = axis_name == "z"
-        carrier.add_joint(name=f"slide_{axis_name}", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=axis,
-                          stiffness=[0.0 if axial else c.lateral_stiffness, 0.0, 0.0],
-                          damping=[case.push / c.approach_speed if axial else c.lateral_damping,
-                                   0.0, 0.0])
+        carrier.add_joint(
+            name=f"slide_{axis_name}",
+            type=mujoco.mjtJoint.mjJNT_SLIDE,
+            axis=axis,
+            stiffness=[0.0 if axial else c.lateral_stiffness, 0.0, 0.0],
+            damping=[case.push / c.approach_speed if axial else c.lateral_damping, 0.0, 0.0],
+        )
     for i, axis_name in enumerate("xyz"):
         axis = [0.0, 0.0, 0.0]
         axis[i] = 1.0
-        carrier.add_joint(name=f"hinge_{axis_name}", type=mujoco.mjtJoint.mjJNT_HINGE, axis=axis,
-                          stiffness=[c.rotational_stiffness, 0.0, 0.0],
-                          damping=[c.rotational_damping, 0.0, 0.0])
+        carrier.add_joint(
+            name=f"hinge_{axis_name}",
+            type=mujoco.mjtJoint.mjJNT_HINGE,
+            axis=axis,
+            stiffness=[c.rotational_stiffness, 0.0, 0.0],
+            damping=[c.rotational_damping, 0.0, 0.0],
+        )
     mount = carrier.add_site(name="attachment_site", quat=quat.tolist())
-    mount.attach_body(build_plug(plug, contact, collision=plug_collision).body("dock"),
-                      prefix="tool_")
+    mount.attach_body(build_plug(plug, contact, collision=plug_collision).body("dock"), prefix="tool_")
 
     model = spec.compile()
     data = mujoco.MjData(model)
-    return Rig(model=model, data=data, tcp_site=model.site("tool_tcp").id,
-               seat_site=model.site("target_seat").id,
-               push_dof=int(model.joint("slide_z").dofadr[0]))
+    return Rig(
+        model=model,
+        data=data,
+        tcp_site=model.site("tool_tcp").id,
+        seat_site=model.site("target_seat").id,
+        push_dof=int(model.joint("slide_z").dofadr[0]),
+    )
 
 
-def run_insertion(rig: Rig, push: float, *, duration: float = 3.0, dwell: float = 0.2,
-                  stall_time: float = 0.3, monitor=None) -> InsertionResult:
+def run_insertion(
+    rig: Rig, push: float, *, duration: float = 3.0, dwell: float = 0.2, stall_time: float = 0.3, monitor=None
+) -> InsertionResult:
     """Push the plug with ``push`` newtons along -z until it seats, jams or time runs out.
 
     Seated: tip height above the seat <= SEAT_TOLERANCE; the run then goes on for
@@ -214,19 +229,31 @@ def run_insertion(rig: Rig, push: float, *, duration: float = 3.0, dwell: float 
             break
     height = float(data.site_xpos[rig.tcp_site][2] - data.site_xpos[rig.seat_site][2])
     return InsertionResult(
-        seated=seat_time is not None, jammed=jammed, seat_time=seat_time,
+        seated=seat_time is not None,
+        jammed=jammed,
+        seat_time=seat_time,
         final_tip_height=height,
         min_contact_dist=min_dist if contact_steps else math.nan,
         steady_contact_dist=float(np.mean(steady)) if steady else math.nan,
         contact_steps=contact_steps,
         us_per_step=1e-3 * step_ns / contact_steps if contact_steps else math.nan,
         collision_us_per_step=1e6 * collision_s / contact_steps if contact_steps else math.nan,
-        max_contacts=max_contacts)
+        max_contacts=max_contacts,
+    )
 
 
-def insert(plug: PlugGeometry, socket: SocketGeometry, contact: ContactParams, case: Case,
-           *, plug_collision: str = "cylinder_tip", disable_midphase: bool = False,
-           filter_pairs: bool = True, repeats: int = 1, **run_kwargs) -> InsertionResult:
+def insert(
+    plug: PlugGeometry,
+    socket: SocketGeometry,
+    contact: ContactParams,
+    case: Case,
+    *,
+    plug_collision: str = "cylinder_tip",
+    disable_midphase: bool = False,
+    filter_pairs: bool = True,
+    repeats: int = 1,
+    **run_kwargs,
+) -> InsertionResult:
     """Build the rig for ``case`` and run one insertion (``repeats`` times, keeping the
     fastest per-step timings: the physics is deterministic, only the clock is noisy).
 
@@ -244,8 +271,7 @@ def insert(plug: PlugGeometry, socket: SocketGeometry, contact: ContactParams, c
     for _ in range(repeats - 1):
         again = run_insertion(rig, case.push, **run_kwargs)
         best.us_per_step = min(best.us_per_step, again.us_per_step)
-        best.collision_us_per_step = min(best.collision_us_per_step,
-                                         again.collision_us_per_step)
+        best.collision_us_per_step = min(best.collision_us_per_step, again.collision_us_per_step)
     return best
 
 
@@ -314,8 +340,7 @@ CANDIDATES = (
     Candidate("16+16 boxes / capsule + tip mesh", SocketGeometry(), "capsule_tip"),
     Candidate("16+16 boxes / one convex mesh plug", SocketGeometry(), "mesh"),
     Candidate("12+12 boxes / cylinder + chamfer mesh", SocketGeometry(sectors=12), "cylinder_tip"),
-    Candidate("default, midphase disabled", SocketGeometry(), "cylinder_tip",
-              disable_midphase=True),
+    Candidate("default, midphase disabled", SocketGeometry(), "cylinder_tip", disable_midphase=True),
 )
 
 
@@ -325,50 +350,77 @@ def _outcome(r: InsertionResult) -> str:
     return "JAMMED" if r.jammed else "no"
 
 
-def _print_insertion_table(plug: PlugGeometry, contact: ContactParams,
-                           candidates, cases) -> None:
-    print("| geometry | case | us/step in contact | collision us/step | seated | "
-          "max penetration [um] | max contacts |")
+def _print_insertion_table(plug: PlugGeometry, contact: ContactParams, candidates, cases) -> None:
+    print(
+        "| geometry | case | us/step in contact | collision us/step | seated | "
+        "max penetration [um] | max contacts |"
+    )
     print("|---|---|---|---|---|---|---|")
     for cand in candidates:
         for case in cases:
-            r = insert(plug, cand.socket, contact, case, plug_collision=cand.plug_collision,
-                       disable_midphase=cand.disable_midphase,
-                       filter_pairs=cand.filter_pairs, repeats=5, dwell=0.5)
-            print(f"| {cand.name} | {case.name} | {r.us_per_step:.1f} | "
-                  f"{r.collision_us_per_step:.1f} | {_outcome(r)} | "
-                  f"{-1e6 * r.min_contact_dist:.1f} | {r.max_contacts} |", flush=True)
+            r = insert(
+                plug,
+                cand.socket,
+                contact,
+                case,
+                plug_collision=cand.plug_collision,
+                disable_midphase=cand.disable_midphase,
+                filter_pairs=cand.filter_pairs,
+                repeats=5,
+                dwell=0.5,
+            )
+            print(
+                f"| {cand.name} | {case.name} | {r.us_per_step:.1f} | "
+                f"{r.collision_us_per_step:.1f} | {_outcome(r)} | "
+                f"{-1e6 * r.min_contact_dist:.1f} | {r.max_contacts} |",
+                flush=True,
+            )
 
 
 def _print_clearance_table(plug: PlugGeometry) -> None:
-    print("| sectors | nominal clearance [mm] | measured min clearance [mm] | "
-          "max (corner) [mm] | chord polygon would give [mm] |")
+    print(
+        "| sectors | nominal clearance [mm] | measured min clearance [mm] | "
+        "max (corner) [mm] | chord polygon would give [mm] |"
+    )
     print("|---|---|---|---|---|")
     for sectors in (12, 16):
         socket = SocketGeometry(sectors=sectors)
         lo, hi = measured_free_radius(socket, 0.5 * socket.insertion_depth)
         chord = socket.bore_radius * math.cos(math.pi / sectors) - plug.radius
-        print(f"| {sectors} | {1e3 * socket.radial_clearance:.3f} | "
-              f"{1e3 * (lo - plug.radius):.3f} | {1e3 * (hi - plug.radius):.3f} | "
-              f"{1e3 * chord:.3f} |")
+        print(
+            f"| {sectors} | {1e3 * socket.radial_clearance:.3f} | "
+            f"{1e3 * (lo - plug.radius):.3f} | {1e3 * (hi - plug.radius):.3f} | "
+            f"{1e3 * chord:.3f} |"
+        )
 
 
 def _print_contact_table(plug: PlugGeometry, candidates, case: Case) -> None:
-    print(f"Contact parameters, case '{case.name}': penetration on the seat (mean over the "
-          "last 0.2 s), deepest penetration (impact at the approach speed), ripple of the "
-          "axial contact force on the seat (std).")
-    print("| contact | solref | solimp | push [N] | seated | steady pen. [um] | "
-          "max pen. [um] | force on seat [N] |")
+    print(
+        f"Contact parameters, case '{case.name}': penetration on the seat (mean over the "
+        "last 0.2 s), deepest penetration (impact at the approach speed), ripple of the "
+        "axial contact force on the seat (std)."
+    )
+    print(
+        "| contact | solref | solimp | push [N] | seated | steady pen. [um] | "
+        "max pen. [um] | force on seat [N] |"
+    )
     print("|---|---|---|---|---|---|---|---|")
     for name, contact in candidates:
         for push in (5.0, 30.0):
             forces = []
-            r = insert(plug, SocketGeometry(), contact, replace(case, push=push),
-                       monitor=lambda m, d: forces.append(axial_contact_force(m, d)))
+            r = insert(
+                plug,
+                SocketGeometry(),
+                contact,
+                replace(case, push=push),
+                monitor=lambda m, d: forces.append(axial_contact_force(m, d)),
+            )
             tail = np.array(forces[-150:])
-            print(f"| {name} | {contact.solref} | {contact.solimp} | {push:.0f} | "
-                  f"{'yes' if r.seated else 'no'} | {-1e6 * r.steady_contact_dist:.1f} | "
-                  f"{-1e6 * r.min_contact_dist:.1f} | {tail.mean():.1f} +- {tail.std():.2f} |")
+            print(
+                f"| {name} | {contact.solref} | {contact.solimp} | {push:.0f} | "
+                f"{'yes' if r.seated else 'no'} | {-1e6 * r.steady_contact_dist:.1f} | "
+                f"{-1e6 * r.min_contact_dist:.1f} | {tail.mean():.1f} +- {tail.std():.2f} |"
+            )
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -377,16 +429,14 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     plug, contact = PlugGeometry(), ContactParams()
     started = time.perf_counter()
-    print(f"MuJoCo {mujoco.__version__}; {contact}; approach speed "
-          f"{Compliance().approach_speed} m/s\n")
+    print(f"MuJoCo {mujoco.__version__}; {contact}; approach speed {Compliance().approach_speed} m/s\n")
     candidates = CANDIDATES[:1] if args.quick else CANDIDATES
     cases = CASES[:2] if args.quick else CASES
     _print_insertion_table(plug, contact, candidates, cases)
     print()
     _print_clearance_table(plug)
     print()
-    _print_contact_table(plug, CONTACT_CANDIDATES[:1] if args.quick else CONTACT_CANDIDATES,
-                         CASES[1])
+    _print_contact_table(plug, CONTACT_CANDIDATES[:1] if args.quick else CONTACT_CANDIDATES, CASES[1])
     print(f"\nwall time {time.perf_counter() - started:.1f} s")
     return 0
 

@@ -27,7 +27,7 @@ from pathlib import Path
 
 from compliant_docking import CONF_DIR, REPO_ROOT
 from compliant_docking.config import load_config
-from compliant_docking.simulate import prepare, replay_physics
+from compliant_docking.sim.simulate import prepare, replay_physics
 
 #: targets of the issues: minimum real-time factor per controller, maximum loop/replay
 RTF_TARGETS = {"impedance": 25.0, "hqp": 15.0, "se3_lie": 20.0}
@@ -48,8 +48,12 @@ def measure(overrides: list[str]) -> tuple[float, float, float]:
 def time_cli() -> float:
     with tempfile.TemporaryDirectory() as tmp:
         start = time.perf_counter()
-        subprocess.run([sys.executable, "-m", "compliant_docking", f"hydra.run.dir={tmp}/run",
-                        "task.progress=false"], cwd=REPO_ROOT, check=True, capture_output=True)
+        subprocess.run(
+            [sys.executable, "-m", "compliant_docking", f"hydra.run.dir={tmp}/run", "task.progress=false"],
+            cwd=REPO_ROOT,
+            check=True,
+            capture_output=True,
+        )
         return time.perf_counter() - start
 
 
@@ -63,27 +67,35 @@ def main() -> int:
     parser.add_argument("overrides", nargs="*", help="extra Hydra overrides for every run")
     args = parser.parse_args()
 
-    print(f"{'robot':8} {'controller':11} {'RTF best':>9} {'RTF median':>11} {'loop µs':>8} "
-          f"{'replay µs':>10} {'loop/replay':>12}  target")
+    print(
+        f"{'robot':8} {'controller':11} {'RTF best':>9} {'RTF median':>11} {'loop µs':>8} "
+        f"{'replay µs':>10} {'loop/replay':>12}  target"
+    )
     failures = 0
     for robot in args.robots:
         for controller in args.controllers:
-            runs = [measure([f"robot={robot}", f"controller={controller}", *args.overrides])
-                    for _ in range(args.repeats)]
+            runs = [
+                measure([f"robot={robot}", f"controller={controller}", *args.overrides])
+                for _ in range(args.repeats)
+            ]
             rtf = [r[0] for r in runs]
             best = max(range(len(runs)), key=lambda i: rtf[i])
             ratio = runs[best][1] / runs[best][2]
             target = RTF_TARGETS.get(controller)
             ok = (target is None or rtf[best] >= target) and ratio <= RATIO_TARGET
             failures += not ok
-            print(f"{robot:8} {controller:11} {rtf[best]:9.1f} {statistics.median(rtf):11.1f} "
-                  f"{runs[best][1]:8.1f} {runs[best][2]:10.1f} {ratio:12.2f}  "
-                  f"RTF ≥ {target or '-'}, ratio ≤ {RATIO_TARGET:g}: {'met' if ok else 'MISSED'}")
+            print(
+                f"{robot:8} {controller:11} {rtf[best]:9.1f} {statistics.median(rtf):11.1f} "
+                f"{runs[best][1]:8.1f} {runs[best][2]:10.1f} {ratio:12.2f}  "
+                f"RTF ≥ {target or '-'}, ratio ≤ {RATIO_TARGET:g}: {'met' if ok else 'MISSED'}"
+            )
     if not args.no_cli:
         wall = time_cli()
         failures += wall > CLI_TARGET_S
-        print(f"\nwhole `python -m compliant_docking` (default run): {wall:.2f} s wall "
-              f"(target < {CLI_TARGET_S:g} s: {'met' if wall <= CLI_TARGET_S else 'MISSED'})")
+        print(
+            f"\nwhole `python -m compliant_docking` (default run): {wall:.2f} s wall "
+            f"(target < {CLI_TARGET_S:g} s: {'met' if wall <= CLI_TARGET_S else 'MISSED'})"
+        )
     return 1 if failures else 0
 
 

@@ -13,7 +13,7 @@ Three wall times of the same N default docking runs (figures drawn, as every job
   ``python -m compliant_docking`` commands, one after another — what running them one
   after another costs a user without ``-m``; each command pays its own start-up.
 - **sequential, in-process** (stricter, for diagnosis): the N runs through
-  ``compliant_docking.runner.execute`` in this one process (config composed with
+  ``compliant_docking.run.runner.execute`` in this one process (config composed with
   ``load_config``), libraries imported once, no start-up per run. Its ratio shows what
   Hydra's and the pool's fixed costs (≈ 4-5 s per sweep) take from the ideal 1/WORKERS.
 
@@ -44,7 +44,7 @@ REPO = Path(__file__).resolve().parent.parent
 def sequential(runs: int, out: Path) -> float:
     """Wall time [s] of ``runs`` default runs through runner.execute in this process."""
     from compliant_docking.config import load_config
-    from compliant_docking.runner import execute
+    from compliant_docking.run.runner import execute
 
     start = time.perf_counter()
     for i in range(runs):
@@ -58,9 +58,18 @@ def commands(runs: int, out: Path) -> float:
     """Wall time [s] of ``runs`` separate single-run commands, one after another."""
     start = time.perf_counter()
     for i in range(runs):
-        result = subprocess.run([sys.executable, "-m", "compliant_docking", "task.progress=false",
-                                 f"hydra.run.dir={out / f'run_{i}'}"],
-                                cwd=REPO, capture_output=True, text=True)
+        result = subprocess.run(
+            [
+                sys.executable,
+                "-m",
+                "compliant_docking",
+                "task.progress=false",
+                f"hydra.run.dir={out / f'run_{i}'}",
+            ],
+            cwd=REPO,
+            capture_output=True,
+            text=True,
+        )
         if result.returncode == 1:
             raise SystemExit(f"single run {i} failed:\n{result.stdout[-2000:]}\n{result.stderr[-2000:]}")
     return time.perf_counter() - start
@@ -69,14 +78,22 @@ def commands(runs: int, out: Path) -> float:
 def parallel(runs: int, workers: int, out: Path) -> float:
     """Wall time [s] of one ``-m`` sweep of ``runs`` default runs on ``workers`` processes."""
     seeds = ",".join(str(i) for i in range(runs))
-    command = [sys.executable, "-m", "compliant_docking", "-m", f"task.misalignment.seed={seeds}",
-               f"hydra.launcher.n_jobs={workers}", f"hydra.sweep.dir={out}"]
+    command = [
+        sys.executable,
+        "-m",
+        "compliant_docking",
+        "-m",
+        f"task.misalignment.seed={seeds}",
+        f"hydra.launcher.n_jobs={workers}",
+        f"hydra.sweep.dir={out}",
+    ]
     start = time.perf_counter()
     result = subprocess.run(command, cwd=REPO, capture_output=True, text=True)
     elapsed = time.perf_counter() - start
     if result.returncode == 1:
-        raise SystemExit(f"the sweep failed (exit {result.returncode}):\n{result.stdout[-2000:]}"
-                         f"\n{result.stderr[-2000:]}")
+        raise SystemExit(
+            f"the sweep failed (exit {result.returncode}):\n{result.stdout[-2000:]}\n{result.stderr[-2000:]}"
+        )
     return elapsed
 
 
@@ -92,24 +109,30 @@ def main() -> int:
     args = parser.parse_args()
 
     load = os.getloadavg()[0]
-    print(f"machine: {os.cpu_count()} cores, load average {load:.2f} (1 min)"
-          + ("  <- busy: expect noisy numbers" if load > 0.5 else ""))
+    print(
+        f"machine: {os.cpu_count()} cores, load average {load:.2f} (1 min)"
+        + ("  <- busy: expect noisy numbers" if load > 0.5 else "")
+    )
     times: dict[str, list[float]] = {"parallel": [], "commands": [], "inprocess": []}
     with tempfile.TemporaryDirectory(prefix="sweep_efficiency_") as tmp:
         for k in range(args.repeat):
             base = Path(tmp) / str(k)
-            steps = [("parallel", lambda: parallel(args.runs, args.workers, base / "par")),
-                     ("commands", lambda: commands(args.runs, base / "cmd")),
-                     ("inprocess", lambda: sequential(args.runs, base / "seq"))]
+            steps = [
+                ("parallel", lambda: parallel(args.runs, args.workers, base / "par")),
+                ("commands", lambda: commands(args.runs, base / "cmd")),
+                ("inprocess", lambda: sequential(args.runs, base / "seq")),
+            ]
             if k % 2:
                 steps.reverse()
             t = {name: step() for name, step in steps}
             for name, value in t.items():
                 times[name].append(value)
-            print(f"[{k + 1}/{args.repeat}] parallel {t['parallel']:.1f} s "
-                  f"(job wall mean {statistics.mean(job_walls(base / 'par')):.2f} s) · "
-                  f"sequential commands {t['commands']:.1f} s · sequential in-process "
-                  f"{t['inprocess']:.1f} s (job wall mean {statistics.mean(job_walls(base / 'seq')):.2f} s)")
+            print(
+                f"[{k + 1}/{args.repeat}] parallel {t['parallel']:.1f} s "
+                f"(job wall mean {statistics.mean(job_walls(base / 'par')):.2f} s) · "
+                f"sequential commands {t['commands']:.1f} s · sequential in-process "
+                f"{t['inprocess']:.1f} s (job wall mean {statistics.mean(job_walls(base / 'seq')):.2f} s)"
+            )
     target = 0.6
 
     def ratios(baseline: str) -> tuple[float, float]:
@@ -118,13 +141,19 @@ def main() -> int:
         return min(times["parallel"]) / min(times[baseline]), statistics.median(per_repeat)
 
     best, median = ratios("commands")
-    print(f"\n{args.runs} default docking runs on {args.workers} workers, parallel / sequential wall "
-          f"time (ideal {1 / args.workers:.2f}; best = fastest of each over {args.repeat} repeats):")
-    print(f"  vs {args.runs} separate commands  : best {best:.3f}, median {median:.3f}  "
-          f"(target <= {target}) -> {'PASS' if best <= target else 'FAIL'}")
+    print(
+        f"\n{args.runs} default docking runs on {args.workers} workers, parallel / sequential wall "
+        f"time (ideal {1 / args.workers:.2f}; best = fastest of each over {args.repeat} repeats):"
+    )
+    print(
+        f"  vs {args.runs} separate commands  : best {best:.3f}, median {median:.3f}  "
+        f"(target <= {target}) -> {'PASS' if best <= target else 'FAIL'}"
+    )
     best_in, median_in = ratios("inprocess")
-    print(f"  vs in-process execute() : best {best_in:.3f}, median {median_in:.3f}  (stricter: "
-          f"no start-up in the baseline)")
+    print(
+        f"  vs in-process execute() : best {best_in:.3f}, median {median_in:.3f}  (stricter: "
+        f"no start-up in the baseline)"
+    )
     return 0 if best <= target else 1
 
 

@@ -32,11 +32,12 @@ libraries with ``ctypes`` only when it has to choose (no display, no user settin
 from __future__ import annotations
 
 import ctypes
+import logging
 import os
 import sys
+from collections.abc import Callable, Mapping, MutableMapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable, Mapping, MutableMapping
 
 #: environment variable MuJoCo reads at import
 MUJOCO_GL = "MUJOCO_GL"
@@ -63,8 +64,9 @@ class Decision:
     reason: str
 
 
-def has_display(env: Mapping[str, str], platform: str = sys.platform,
-                exists: Callable[[str], bool] = os.path.exists) -> bool:
+def has_display(
+    env: Mapping[str, str], platform: str = sys.platform, exists: Callable[[str], bool] = os.path.exists
+) -> bool:
     """Whether a desktop display is reachable (never true on Linux without DISPLAY/WAYLAND_DISPLAY).
 
     A local X display ``:N`` counts only when its socket ``/tmp/.X11-unix/XN`` exists (a
@@ -88,10 +90,14 @@ def has_display(env: Mapping[str, str], platform: str = sys.platform,
     return number.isdigit() and exists(f"/tmp/.X11-unix/X{number}")
 
 
-def choose(env: Mapping[str, str], *, platform: str = sys.platform,
-           display: bool | None = None,
-           egl_loads: Callable[[], bool] | None = None,
-           osmesa_loads: Callable[[], bool] | None = None) -> Decision:
+def choose(
+    env: Mapping[str, str],
+    *,
+    platform: str = sys.platform,
+    display: bool | None = None,
+    egl_loads: Callable[[], bool] | None = None,
+    osmesa_loads: Callable[[], bool] | None = None,
+) -> Decision:
     """The backend for this environment (a pure function of its arguments; see the table above).
 
     ``display``: whether a display is reachable (default: :func:`has_display`).
@@ -100,9 +106,11 @@ def choose(env: Mapping[str, str], *, platform: str = sys.platform,
     user = env.get(MUJOCO_GL, "").strip().lower()
     if user:
         ours = env.get(MARKER, "").strip().lower() == user
-        return Decision(user, "auto" if ours else "user",
-                        f"MUJOCO_GL={user}" + (" (chosen by compliant_docking)" if ours
-                                               else " (set in the environment)"))
+        return Decision(
+            user,
+            "auto" if ours else "user",
+            f"MUJOCO_GL={user}" + (" (chosen by compliant_docking)" if ours else " (set in the environment)"),
+        )
     pyopengl = env.get("PYOPENGL_PLATFORM", "").strip().lower()
     if pyopengl in ("egl", "osmesa"):
         return Decision(pyopengl, "auto", f"MUJOCO_GL={pyopengl}, as PYOPENGL_PLATFORM={pyopengl}")
@@ -114,8 +122,11 @@ def choose(env: Mapping[str, str], *, platform: str = sys.platform,
         return Decision("egl", "auto", "MUJOCO_GL=egl: no display, libEGL loads")
     if (osmesa_loads or osmesa_available)():
         return Decision("osmesa", "auto", "MUJOCO_GL=osmesa: no display and no EGL, libOSMesa loads")
-    return Decision(None, "default", "MUJOCO_GL unset: no display, and neither libEGL "
-                                     "(with an EGL vendor) nor libOSMesa loads")
+    return Decision(
+        None,
+        "default",
+        "MUJOCO_GL unset: no display, and neither libEGL (with an EGL vendor) nor libOSMesa loads",
+    )
 
 
 def _loads(*names: str) -> bool:
@@ -138,8 +149,11 @@ def egl_available(env: Mapping[str, str] = os.environ) -> bool:
         return False
     if env.get("__EGL_VENDOR_LIBRARY_FILENAMES"):
         return True
-    dirs = env.get("__EGL_VENDOR_LIBRARY_DIRS", "").split(":") if env.get(
-        "__EGL_VENDOR_LIBRARY_DIRS") else EGL_VENDOR_DIRS
+    dirs = (
+        env.get("__EGL_VENDOR_LIBRARY_DIRS", "").split(":")
+        if env.get("__EGL_VENDOR_LIBRARY_DIRS")
+        else EGL_VENDOR_DIRS
+    )
     return any(Path(d).is_dir() and any(Path(d).glob("*.json")) for d in dirs)
 
 
@@ -165,17 +179,21 @@ def configure(environ: MutableMapping[str, str] = os.environ) -> Decision:
         return _decision
     _too_late = "mujoco" in sys.modules
     decision = choose(environ)
-    if not _too_late and decision.source == "auto" and not environ.get(MUJOCO_GL):
+    if not _too_late and decision.source == "auto" and decision.backend and not environ.get(MUJOCO_GL):
         environ[MUJOCO_GL] = decision.backend
         environ[MARKER] = decision.backend
-    if decision.source == "user" and not _too_late:
+    if decision.source == "user" and decision.backend and not _too_late:
         probe = {"egl": egl_available, "osmesa": osmesa_available}.get(decision.backend)
         if probe is not None and not probe():  # `import mujoco` is about to fail
             sys.stderr.write(
                 f"warning: MUJOCO_GL={decision.backend} is set but its libraries do not load, "
                 f"so `import mujoco` will fail; install them (Debian: apt-get install -y "
-                f"{DEBIAN_PACKAGES[decision.backend]}) or unset MUJOCO_GL\n")
+                f"{DEBIAN_PACKAGES[decision.backend]}) or unset MUJOCO_GL\n"
+            )
     _decision = decision
+    # PyOpenGL (imported by mujoco for EGL/OSMesa) logs at INFO that its optional C
+    # accelerator is missing; a run's console is no place for that
+    logging.getLogger("OpenGL.acceleratesupport").setLevel(logging.WARNING)
     return decision
 
 
@@ -193,18 +211,23 @@ def offscreen_possible(env: Mapping[str, str] = os.environ) -> bool:
 def no_backend_message(detail: str = "") -> str:
     """The one-paragraph explanation when offscreen rendering is impossible or failed."""
     d = decision()
-    late = (" Note: mujoco was imported before compliant_docking, so the automatic choice "
-            "came too late; import compliant_docking first or set MUJOCO_GL yourself."
-            if _too_late else "")
+    late = (
+        " Note: mujoco was imported before compliant_docking, so the automatic choice "
+        "came too late; import compliant_docking first or set MUJOCO_GL yourself."
+        if _too_late
+        else ""
+    )
     what = f" ({detail})" if detail else ""
-    return (f"render=video needs an OpenGL context for offscreen rendering and none could be "
-            f"created here{what}; backend: {d.reason}. MuJoCo picks its backend from the "
-            f"environment variable MUJOCO_GL when it is first imported: 'egl' (headless; Debian "
-            f"packages {DEBIAN_PACKAGES['egl']}), 'osmesa' (headless software rendering; Debian "
-            f"package {DEBIAN_PACKAGES['osmesa']}) or 'glfw' (needs a display). Install one "
-            f"(`make gl` does it on Debian, as root: apt-get install -y "
-            f"{DEBIAN_PACKAGES['egl']}), or set MUJOCO_GL=egl or MUJOCO_GL=osmesa before "
-            f"starting Python. The simulation's results were kept.{late}")
+    return (
+        f"render=video needs an OpenGL context for offscreen rendering and none could be "
+        f"created here{what}; backend: {d.reason}. MuJoCo picks its backend from the "
+        f"environment variable MUJOCO_GL when it is first imported: 'egl' (headless; Debian "
+        f"packages {DEBIAN_PACKAGES['egl']}), 'osmesa' (headless software rendering; Debian "
+        f"package {DEBIAN_PACKAGES['osmesa']}) or 'glfw' (needs a display). Install one "
+        f"(`make gl` does it on Debian, as root: apt-get install -y "
+        f"{DEBIAN_PACKAGES['egl']}), or set MUJOCO_GL=egl or MUJOCO_GL=osmesa before "
+        f"starting Python. The simulation's results were kept.{late}"
+    )
 
 
 if __name__ == "__main__":
@@ -214,10 +237,8 @@ if __name__ == "__main__":
     if "--packages" in sys.argv[1:]:
         print(DEBIAN_PACKAGES["egl"])
         sys.exit(0)
-    found = [name for name, probe in (("egl", egl_available), ("osmesa", osmesa_available))
-             if probe()]
+    found = [name for name, probe in (("egl", egl_available), ("osmesa", osmesa_available)) if probe()]
     ok = bool(found) or not sys.platform.startswith("linux")
     if "--quiet" not in sys.argv[1:]:
-        print(f"headless OpenGL for MuJoCo: {', '.join(found) or 'none'}; "
-              f"here: {choose(os.environ).reason}")
+        print(f"headless OpenGL for MuJoCo: {', '.join(found) or 'none'}; here: {choose(os.environ).reason}")
     sys.exit(0 if ok else 1)

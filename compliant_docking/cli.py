@@ -1,0 +1,156 @@
+"""The command line: ``python -m compliant_docking [overrides]`` — one run, or a sweep with ``-m``.
+
+Exit status: 0 the run succeeded (docked / tracking gate PASS), 1 the run failed
+(error or divergence), 3 the run finished but its gate did not pass.
+A sweep (``-m``): 1 if any job failed (or its worker died), else 0 — jobs that did not
+dock are results, counted in the summary (compliant_docking/sweep/summary.py); 2 a
+refused ``resume=`` (compliant_docking/sweep/resume.py); 143 stopped by SIGTERM (the
+summary of what finished is written, as after Ctrl-C).
+
+``--help`` lists the config groups and their options (Hydra's own help would also list
+the typed schemas, which are not choices).
+"""
+
+from __future__ import annotations
+
+import signal
+import sys
+from pathlib import Path
+
+import hydra
+from hydra.core.config_store import ConfigStore
+from hydra.core.hydra_config import HydraConfig
+from hydra.types import RunMode
+from omegaconf import DictConfig, OmegaConf
+
+from compliant_docking import CONF_DIR
+from compliant_docking.config import register_schemas
+from compliant_docking.sweep import launchers, resume
+from compliant_docking.sweep.session import SweepSession
+
+
+class CommandLine:
+    """One invocation: the records of the jobs run in this process (single runs, and
+    sweeps launched in-process) and the sweep session (jobs run by workers)."""
+
+    def __init__(self) -> None:
+        self.records: list[dict] = []
+
+    def task(self, cfg: DictConfig) -> str | None:
+        """Hydra's task function: one job into Hydra's output directory."""
+        from compliant_docking.run.runner import execute
+
+        hydra_cfg = HydraConfig.get()
+        out_dir = Path(hydra_cfg.runtime.output_dir)
+        if resume.resuming(hydra_cfg):  # resume=<sweep dir>: keep a finished job untouched
+            kept = resume.finished_record(cfg, out_dir)
+            if kept is not None:
+                self.records.append(kept)
+                return resume.SKIPPED
+            resume.prepare_rerun(cfg, out_dir)
+        # in a sweep, each job prints one progress line (SweepCallback), not its summary
+        self.records.append(execute(cfg, out_dir, echo=hydra_cfg.mode != RunMode.MULTIRUN))
+        return None
+
+    def run(self, argv: list[str]) -> int:
+        """Run the command ``argv`` (without the program name); the exit status."""
+        if any(arg in ("--help", "-h") for arg in argv):
+            print_help(argv)
+            return 0
+        try:
+            argv = resume.translate_argv(argv)  # resume=<sweep dir> → Hydra overrides
+        except resume.ResumeError as exc:
+            return resume.fail(exc)
+        register_schemas()
+        launchers.register_schemas(ConfigStore.instance())  # hydra/launcher=submitit_*
+        if any(arg in ("-m", "--multirun") for arg in argv):
+            signal.signal(signal.SIGTERM, _terminated)  # like Ctrl-C: summarise what finished
+        app = hydra.main(version_base="1.3", config_path=str(CONF_DIR), config_name="config")(self.task)
+        saved, sys.argv[1:] = sys.argv[1:], argv  # Hydra parses sys.argv
+        with SweepSession.open() as session:
+            try:
+                app()
+            except (SystemExit, KeyboardInterrupt):
+                session.finish_aborted()  # a sweep cut short (worker crash, Ctrl-C): summarise it
+                raise
+            finally:
+                sys.argv[1:] = saved
+            if session.outcome is not None:  # the jobs ran in worker processes
+                return session.outcome.exit_status
+        from compliant_docking.run.runner import exit_status
+
+        return max((exit_status(r) for r in self.records), default=0)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``python -m compliant_docking``; the exit status."""
+    return CommandLine().run(sys.argv[1:] if argv is None else list(argv))
+
+
+def _terminated(signum, frame) -> None:
+    """SIGTERM in a sweep (``kill``, Slurm's ``scancel`` of the launching job): unwind
+    like Ctrl-C, so the joblib workers are stopped and the summary is written."""
+    raise SystemExit(128 + signum)
+
+
+# --------------------------------------------------------------------------- --help
+GROUPS = {
+    "robot": "the arm",
+    "tool": "the plug on the flange",
+    "target": "the socket; none: free space",
+    "physics": "MuJoCo options and gravity",
+    "controller": "the control law",
+    "trajectory": "the planner",
+    "task": "start pose, run length, success criteria",
+    "render": "video of the run: render=video writes docking.mp4",
+    "experiment": "presets, added with +experiment=NAME",
+    "robot_controller": "per-robot gains, applied automatically as ${robot}_${controller}",
+}
+#: groups that are not for composing by hand
+HIDDEN = ("hydra", "schema")
+
+USAGE = """\
+compliant-docking: simulate a robot arm docking a plug into a socket under compliant control.
+
+Usage:
+  python -m compliant_docking [group=option ...] [key=value ...]      one run into runs/
+  python -m compliant_docking -m group=a,b [key=v1,v2 ...]            a sweep into runs/multirun/
+
+Examples:
+  python -m compliant_docking controller=hqp robot=fr3
+  python -m compliant_docking physics=earth controller.k=100
+  python -m compliant_docking -m controller=impedance,hqp,se3_lie robot=iiwa14,fr3
+  python -m compliant_docking -m +experiment=controller_comparison    (presets: conf/experiment)
+  python -m compliant_docking -m <same overrides> resume=last          (finish an interrupted sweep)
+  python -m compliant_docking -m <overrides> hydra/launcher=submitit_slurm hydra.launcher.partition=P
+  python -m compliant_docking.report runs/multirun/<date>/<time>      (tables and figures again)
+
+Exit status: 0 success, 1 the run failed (error, divergence), 3 the run's gate did not pass.
+Hydra's own options: --hydra-help, --cfg job (print the composed config), --info.
+"""
+
+
+def print_help(overrides: list[str]) -> None:
+    """The usage, the groups with their options (default first), the composed config."""
+    from hydra import compose, initialize_config_dir
+    from hydra.core.global_hydra import GlobalHydra
+
+    register_schemas()
+    GlobalHydra.instance().clear()
+    with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
+        loader = GlobalHydra.instance().config_loader()
+        print(USAGE)
+        print("Configuration groups (group=option; default first):")
+        cfg = compose(
+            config_name="config", overrides=[o for o in overrides if "=" in o and not o.startswith("-")]
+        )
+        groups = [g for g in loader.list_groups("") if not g.startswith(HIDDEN)]
+        for group in sorted(groups, key=lambda g: (list(GROUPS).index(g) if g in GROUPS else 99, g)):
+            options = sorted(loader.get_group_options(group))
+            node = cfg.get(group)
+            default = node.get("name") if hasattr(node, "get") else None
+            ordered = [default] + [o for o in options if o != default] if default in options else options
+            what = f"  — {GROUPS[group]}" if group in GROUPS else ""
+            print(f"  {group:<17} {', '.join(ordered)}{what}")
+        print("\nThe composed configuration (override any key as key=value):\n")
+        print(OmegaConf.to_yaml(cfg))

@@ -1,0 +1,77 @@
+"""Registration of the typed schemas in Hydra's ConfigStore, and composing a config in Python.
+
+Every YAML option under ``conf/<group>/`` starts its defaults list with the schema of its
+group (``- /schema/<group>@_here_: <schema>``); :func:`register_schemas` stores them under
+``schema/<group>``. :func:`load_config` composes a config exactly as the command line does,
+for scripts, notebooks and tests.
+"""
+
+from __future__ import annotations
+
+from hydra.core.config_store import ConfigStore
+from omegaconf import DictConfig
+
+from compliant_docking import CONF_DIR
+from compliant_docking.config.schemas import (
+    Config,
+    HoldConfig,
+    HQPConfig,
+    ImpedanceConfig,
+    NoRenderConfig,
+    NoTargetConfig,
+    PhysicsConfig,
+    QuinticConfig,
+    RenderConfig,
+    RobotConfig,
+    SE3LieConfig,
+    SE3ToppConfig,
+    TargetConfig,
+    TaskConfig,
+    ToolConfig,
+    TrackingConfig,
+    TwoPhaseConfig,
+)
+
+_SCHEMAS: dict[str, dict[str, type]] = {
+    "robot": {"robot": RobotConfig},
+    "tool": {"tool": ToolConfig},
+    "target": {"socket": TargetConfig, "none": NoTargetConfig},
+    "physics": {"physics": PhysicsConfig},
+    "controller": {"impedance": ImpedanceConfig, "hqp": HQPConfig, "se3_lie": SE3LieConfig},
+    "trajectory": {
+        "quintic": QuinticConfig,
+        "hold": HoldConfig,
+        "twophase": TwoPhaseConfig,
+        "se3topp": SE3ToppConfig,
+        "tracking": TrackingConfig,
+    },
+    "task": {"task": TaskConfig},
+    "render": {"none": NoRenderConfig, "video": RenderConfig},
+}
+
+
+def register_schemas() -> None:
+    """Store every schema in Hydra's ConfigStore (idempotent).
+
+    The schemas of the submitit launcher presets are registered by the command line
+    (:func:`compliant_docking.sweep.launchers.register_schemas`): they belong to sweeps.
+    """
+    cs = ConfigStore.instance()
+    cs.store(name="base_config", node=Config)
+    for group, schemas in _SCHEMAS.items():
+        for name, node in schemas.items():
+            cs.store(group=f"schema/{group}", name=name, node=node)
+
+
+def load_config(*overrides: str) -> DictConfig:
+    """The composed config for these overrides, exactly as the command line builds it.
+
+    For scripts, notebooks and tests: ``sim.simulate.prepare(load_config("robot=fr3"))``.
+    """
+    from hydra import compose, initialize_config_dir
+    from hydra.core.global_hydra import GlobalHydra
+
+    register_schemas()
+    GlobalHydra.instance().clear()
+    with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
+        return compose(config_name="config", overrides=list(overrides))

@@ -1,0 +1,169 @@
+"""Pieces every controller shares: the base class, the task-space inertia Λ with a
+conditioning fallback, and joint friction feed-forward.
+
+A controller maps (arm state, reference, measured wrench) to joint torques. It is built
+once per run from its config's parameters and a :class:`~compliant_docking.sim.context.ControlContext`;
+the simulation loop then calls, every step::
+
+    arm.update(q, v); reference.row(k, ref)
+    tau = controller.compute(t, arm, ref, wrench)   # the command; the motors clip it to
+                                                    # ±context.torque_limits
+
+``arm`` (the :class:`~compliant_docking.sim.models.ArmModel` just updated) is the state
+the law reads: q, v, M, M⁻¹, h, J, J̇v and the TCP pose and twist of this step.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+
+import numpy as np
+from scipy.linalg import lapack
+
+from compliant_docking.config import FrictionComp
+from compliant_docking.planning.base import Reference
+from compliant_docking.sim.context import ControlContext
+from compliant_docking.sim.models import ArmModel
+
+_dposv = lapack.dposv
+
+
+class FrictionFeedForward:
+    """Adds back MuJoCo's joint frictionloss f and damping b that Pinocchio does not model.
+
+    ``torque`` mode: f·tanh(2·τ_pre/f) + b·v (follows the command, so there is no dead zone
+    at zero speed); ``velocity`` mode: f·tanh(v/0.01) + b·v. Joints with f = b = 0 get 0.
+    """
+
+    VELOCITY_SCALE = 0.01  # [rad/s]
+
+    def __init__(self, friction: np.ndarray, damping: np.ndarray, mode: FrictionComp):
+        self.mode = FrictionComp(mode)
+        self.f = np.asarray(friction, dtype=float).copy()
+        self.b = np.asarray(damping, dtype=float).copy()
+        self.active = bool(np.any(self.f > 0.0) or np.any(self.b > 0.0))
+        self._torque_mode = self.mode is FrictionComp.torque
+        # the argument of tanh per unit of its input: 2/f (torque mode) or 1/0.01 (velocity)
+        self._scale = (
+            2.0 / np.where(self.f > 0.0, self.f, 1.0)
+            if self._torque_mode
+            else np.full_like(self.f, 1.0 / self.VELOCITY_SCALE)
+        )
+
+    def __call__(self, tau_pre: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """The feed-forward torque (callers may skip the call when ``active`` is False)."""
+        x = (tau_pre if self._torque_mode else v) * self._scale
+        np.tanh(x, out=x)
+        x *= self.f
+        x += self.b * v
+        return x
+
+
+class TaskInertia:
+    """Applies Λ = (J M⁻¹ Jᵀ)⁻¹ by solving with Λ⁻¹ (LAPACK ``dposv``: Cholesky and
+    solve in one call, no inverse formed).
+
+    When Λ⁻¹ is not positive definite, or its condition number (1-norm estimate,
+    LAPACK ``dpocon``) exceeds ``threshold``, a damped pseudo-inverse with the same
+    eigenvectors is used instead, its smallest eigenvalues lifted so that the condition
+    number stays at ``threshold``. Positive definiteness is checked every step; the
+    condition number every ``check_every`` steps, and every step while it is above
+    the threshold (it changes smoothly with the posture: at 1 kHz, ten steps are 10 ms).
+    Steps using the fallback and the largest condition number seen are reported.
+    """
+
+    def __init__(self, threshold: float = 1e8, check_every: int = 10):
+        if not threshold > 1.0:
+            raise ValueError(f"condition_threshold must be > 1, got {threshold}")
+        self.threshold = float(threshold)
+        self.check_every = int(check_every)
+        self.fallback_steps = 0
+        self.max_condition = 0.0
+        self._step = 0
+        self._ill = False
+
+    def solve(self, J: np.ndarray, JMinv: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+        """Λ·rhs for a vector (6) or a matrix (6×k), given J and J M⁻¹ of this step."""
+        # The transpose of the symmetric product is Fortran-ordered: LAPACK works on it
+        # in place, without a copy.
+        lam_inv = JMinv.dot(J.T).T
+        check = self._ill or self._step % self.check_every == 0
+        self._step += 1
+        if check:
+            anorm = lapack.dlange("1", lam_inv)
+        chol, x, info = _dposv(lam_inv, rhs, overwrite_a=1)
+        if info == 0 and not check:
+            return x
+        if info == 0:
+            rcond, _ = lapack.dpocon(chol, anorm)
+            cond = 1.0 / rcond if rcond > 0.0 else np.inf
+        else:
+            cond = np.inf
+        self.max_condition = max(self.max_condition, cond)
+        self._ill = cond > self.threshold
+        if not self._ill:
+            return x
+        self.fallback_steps += 1
+        return self.damped(JMinv.dot(J.T)).dot(rhs)
+
+    def damped(self, lam_inv: np.ndarray) -> np.ndarray:
+        """The damped pseudo-inverse of Λ⁻¹ whose condition number is capped at the threshold."""
+        eigval, eigvec = np.linalg.eigh(lam_inv)
+        floor = max(eigval[-1], 1e-300) / self.threshold
+        return (eigvec * (eigval / (eigval * eigval + floor * floor))) @ eigvec.T
+
+    def diagnostics(self) -> dict:
+        return {
+            "lambda_fallback_steps": self.fallback_steps,
+            "lambda_max_condition": float(self.max_condition),
+        }
+
+
+class Controller(ABC):
+    """Base class: holds the context and the friction feed-forward."""
+
+    def __init__(
+        self,
+        context: ControlContext,
+        friction_comp: FrictionComp,
+        use_force_feedback: bool = True,
+        name: str = "",
+    ):
+        self.ctx = context
+        self.arm = context.arm
+        self.name = name
+        self.use_force_feedback = bool(use_force_feedback)
+        self.friction = FrictionFeedForward(context.joint_friction, context.joint_damping, friction_comp)
+
+    @abstractmethod
+    def compute(self, t: float, state: ArmModel, ref: Reference, wrench: np.ndarray) -> np.ndarray:
+        """Joint torque command (before clipping) at time t.
+
+        ``state``: the arm after ``update(q, v)`` of this step (q, v, M, M⁻¹, h, J, J̇v,
+        TCP pose and twist). ``ref``: the reference of this step. ``wrench``: measured
+        external wrench [f; m] on the tool at the TCP, world axes (one step old).
+        """
+
+    def diagnostics(self) -> dict:
+        """Scalars about the run for ``metrics.json`` (solver stats, fallbacks, …)."""
+        return {}
+
+    def timeseries(self) -> dict[str, np.ndarray]:
+        """Per-step signals for the run's time series, one row per step (name → array
+        of shape (n,) or (n, k); columns ``name`` or ``name_1 … name_k``)."""
+        return {}
+
+
+def vector_setting(values, size: int, label: str, minimum: float | None = None) -> np.ndarray:
+    """A float vector of the given size (a scalar is broadcast), finite and ≥ minimum; the
+    error names ``controller.<label>``."""
+    arr = np.asarray(values, dtype=float)
+    if arr.ndim == 0:
+        arr = np.full(size, float(arr))
+    if arr.shape != (size,) or not np.isfinite(arr).all():
+        raise ValueError(
+            f"controller.{label} must be {size} finite numbers, got {list(np.atleast_1d(values))}"
+        )
+    if minimum is not None and np.any(arr < minimum):
+        raise ValueError(f"controller.{label} must be ≥ {minimum:g}, got {arr.tolist()}")
+    return arr.copy()

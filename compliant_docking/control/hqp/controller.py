@@ -1,0 +1,440 @@
+"""``controller=hqp``: HQP-AC, a hierarchical QP with adaptive compliance.
+
+CONTROL_LAWS.md §2 (Ren & Shan 2026, Acta Astronautica, §3.2); docs/controllers/hqp.md.
+Decision variable: the joint acceleration q̈. Per control step, with the wrench w = [f; m]
+on the tool at the TCP (world axes; the sensor's or the momentum observer's):
+
+* contact magnitude F = max(‖w‖ − contact_deadband, 0) [N];
+* adaptive stiffness (Eq. 26-27) α = 1/(1 + exp(−k_alpha F)),
+  K_r = clip((1 − α) K0, K_min_ratio K0, K0) — already 0.5 K0 at F = 0;
+* task inertia Λ = (J M⁻¹ Jᵀ)⁻¹ from one eigendecomposition Λ⁻¹ = V diag(λ) Vᵀ (its small
+  eigenvalues floored so that cond(Λ⁻¹) ≤ condition_threshold), giving Λ^½ = V diag(λ^-½) Vᵀ;
+* damping (Eq. 29) D_r = Λ^½ K_r^½ + K_r^½ Λ^½ (see :func:`damping_matrix` for the case
+  where this symmetric matrix is not positive definite);
+* reference wrench F_r = −D_r Δν − K_r e + F_pre, e = [x − x_d; log3(R R_dᵀ)],
+  Δν = ν − ν_d, F_pre = p(t)·[axis; 0] the optional preload (:class:`PreloadRamp`);
+* level 1 (Eq. 33-36): min ‖J q̈ + J̇v − (ν̇_d + Λ⁻¹F_r)‖² + 1e-8‖q̈‖² subject to the
+  zero-order-hold predictions over dt_p
+      |v + dt_p q̈| ≤ v_max,  q_min ≤ q + dt_p v + ½dt_p² q̈ ≤ q_max,  |M q̈ + ĥ| ≤ τ_max,
+  ĥ = h + friction feed-forward, τ_max the software clip (context.torque_limits);
+* level 2 (Eq. 38-43): a_null = k_sa q̈_sa + k_ji q̈_ji with q̈_sa = ((ω_th − w)/ω_th) ∇w/‖∇w‖
+  when the manipulability w = √det(J Jᵀ) < ω_th (else 0) and q̈_ji = −D_ji v − K_ji(q − q_home);
+  min ‖a − a_null‖² subject to the same constraints on q̈* + N a, N = I − M⁻¹JᵀΛJ;
+* τ = M(q̈* + N a*) + ĥ.
+
+Closed loop (constraints inactive, exact model): J q̈ + J̇v = ν̇_d + Λ⁻¹F_r and the contact
+adds Λ⁻¹w, so Λ ë + D_r ė + K_r e = F_pre + w. A constant push w settles at K_r e = w (+F_pre).
+
+Both QPs are ProxQP dense problems built at their first use and updated in place
+afterwards. Each step first computes both levels' optima without constraints (level 1:
+the minimum-norm least squares q̈ = Jᵀ(J Jᵀ + 1e-8 I)⁻¹ b; level 2: a = a_null) and checks
+them against all 21 rows with one product; a level whose optimum meets every row has it
+as its QP solution and ProxQP is not called (``solve_every_step`` calls it anyway). A
+level-1 solve starts from that closed form, so the component along ker J — which the 1e-8
+regulariser leaves undetermined at eps_abs = 1e-5 — stays the minimum-norm one; a level-2
+solve starts from a = 0, feasible by construction (docs/controllers/hqp.md).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pinocchio as pin
+from scipy.linalg import lapack
+
+from compliant_docking.config import ForceSource, NullSpaceMetric
+from compliant_docking.control.base import Controller, vector_setting
+from compliant_docking.control.hqp.compliance import (
+    PreloadRamp,
+    modal_damping,
+    stiffness_scale,
+)
+from compliant_docking.control.hqp.manipulability import manipulability_gradient
+from compliant_docking.control.hqp.qp_level import QPLevel
+from compliant_docking.control.observer import MomentumObserver
+from compliant_docking.planning.base import Reference
+from compliant_docking.sim.context import ControlContext
+from compliant_docking.sim.models import ArmModel
+
+_dsyevd, _dpotrf, _dpotrs, _dposv = lapack.dsyevd, lapack.dpotrf, lapack.dpotrs, lapack.dposv
+
+#: Tikhonov regulariser of the level-1 Hessian (CONTROL_LAWS.md §2)
+REGULARISER = 1e-8
+#: stand-in for an infinite bound (ProxQP wants finite numbers)
+BIG = 1e20
+
+
+# --------------------------------------------------------------------------- the controller
+class HQPController(Controller):
+    """HQP-AC (see the module doc). Parameters as in :class:`compliant_docking.config.HQPConfig`.
+
+    Constraint rows (21): velocity v + dt_p q̈, position q + dt_p v + ½dt_p² q̈, torque
+    M q̈ + ĥ, each within its limits [mid − half, mid + half]. One product
+    Z = [q̈, q, v, 1]·T (T: 22×21, see :meth:`_init_constraints`) gives the rows minus
+    their mid values for both closed-form candidates at once; ProxQP gets the same rows
+    in q̈ units ([I; I; M] q̈ ∈ [l, u]).
+    """
+
+    def __init__(
+        self,
+        context: ControlContext,
+        *,
+        K0,
+        K_min_ratio: float,
+        k_alpha: float,
+        omega_th: float,
+        k_sa: float,
+        K_ji,
+        D_ji,
+        k_ji: float,
+        dt_p: float,
+        eps_abs: float,
+        force_source: ForceSource | str = ForceSource.sensor,
+        observer_kp: float = 20.0,
+        observer_ki: float = 40.0,
+        preload_force: float = 0.0,
+        preload_ramp_s: float = 1.5,
+        contact_deadband: float = 0.0,
+        condition_threshold: float = 1e8,
+        null_space_metric: NullSpaceMetric | str = NullSpaceMetric.euclidean,
+        solve_every_step: bool = False,
+        **common,
+    ):
+        super().__init__(context, **common)
+        arm = self.arm
+        n = arm.nv
+        self.n = n
+        self._check_revolute_chain()
+        self.K0 = vector_setting(K0, 6, "K0", minimum=0.0)
+        if not 0.0 < K_min_ratio <= 1.0:
+            raise ValueError(f"controller.K_min_ratio must be in (0, 1], got {K_min_ratio}")
+        if k_alpha < 0.0 or contact_deadband < 0.0:
+            raise ValueError("controller.k_alpha and controller.contact_deadband must be ≥ 0")
+        if not dt_p > 0.0:
+            raise ValueError(f"controller.dt_p must be > 0 s, got {dt_p}")
+        if not condition_threshold > 1.0:
+            raise ValueError(f"controller.condition_threshold must be > 1, got {condition_threshold}")
+        if omega_th < 0.0 or k_sa < 0.0 or k_ji < 0.0:
+            raise ValueError("controller.omega_th, k_sa and k_ji must be ≥ 0")
+        self.K_min_ratio, self.k_alpha = float(K_min_ratio), float(k_alpha)
+        self.deadband = float(contact_deadband)
+        self.sqrt_K0 = np.sqrt(self.K0)
+        self._P = self.sqrt_K0[:, None] + self.sqrt_K0[None, :]  # D_r = √s·(Λ^½ ∘ P)
+        self.threshold = float(condition_threshold)
+        self.omega_th, self.k_sa = float(omega_th), float(k_sa)
+        self.posture_K = float(k_ji) * vector_setting(K_ji, n, "K_ji", minimum=0.0)
+        self.posture_D = float(k_ji) * vector_setting(D_ji, n, "D_ji", minimum=0.0)
+        self.q_home = np.asarray(context.q_home, dtype=float).copy()
+        self.axis = np.asarray(context.axis, dtype=float) / np.linalg.norm(context.axis)
+        self.preload = PreloadRamp(preload_force, preload_ramp_s, context.dt)
+        self.force_source = ForceSource(force_source)
+        self.observer = (
+            MomentumObserver(context, observer_kp, observer_ki)
+            if self.force_source is ForceSource.observer
+            else None
+        )
+        self.solve_every_step = bool(solve_every_step)
+        self.null_space_metric = NullSpaceMetric(null_space_metric)
+        self._inertia_metric = self.null_space_metric is NullSpaceMetric.inertia
+        self._init_constraints(context, float(dt_p), eps_abs)
+
+        # per-step buffers
+        self._reg6 = REGULARISER * np.eye(6)
+        self._JJ = np.zeros((6, 6))
+        # [D_r; K_r] stacked (D_r symmetric): F_r = [ν_d − ν; −e]·[D_r; K_r]
+        self._DK = np.zeros((12, 6))
+        self._D = self._DK[:6]
+        self._K_diag = self._DK.reshape(-1)[36::7]  # the diagonal of the K_r block (a view)
+        self._z = np.zeros(12)
+        self._z_twist, self._z_pos, self._z_rot = self._z[:6], self._z[6:9], self._z[9:]
+        self._a_null = np.zeros(n)
+        self._Na = np.zeros(n)
+
+        # per-run statistics and per-step records
+        self.steps = 0
+        self.lambda_floor_steps = 0
+        self.lambda_max_condition = 0.0
+        self.modal_damping_steps = 0
+        self.level1_fallbacks = 0  # level 1 failed: unconstrained least squares, level 2 skipped
+        self.level2_zero_steps = 0  # a = 0 (level 2 failed or skipped)
+        self.singularity_steps = 0  # steps with w < omega_th
+        n_steps = int(context.n_steps)
+        self._rec = np.zeros((n_steps, 4))  # F, K_r scale s, preload, manipulability w
+        self._rec_len = n_steps
+        self._fast_steps = 0  # both closed forms met every row
+
+    def _check_revolute_chain(self) -> None:
+        kinds = {j.shortname() for j in self.arm.model.joints[1:]}
+        revolute = {"JointModelRX", "JointModelRY", "JointModelRZ", "JointModelRevoluteUnaligned"}
+        if not kinds <= revolute or self.arm.model.nq != self.arm.nv:
+            raise ValueError(
+                f"controller=hqp needs a serial arm of revolute joints "
+                f"(manipulability gradient); got joints {sorted(kinds)}"
+            )
+
+    def _init_constraints(self, context: ControlContext, dt_p: float, eps_abs: float) -> None:
+        """Constant parts of the 21 constraint rows, and the two QP levels.
+
+        T maps [q̈, q, v, 1] to the rows minus their mid values:
+        rows of T      velocity (7)   position (7)       torque (7)
+        q̈ (7)          dt_p I         ½dt_p² I           M          (M refreshed each step)
+        q (7)          0              I                  0
+        v (7)          I              dt_p I             0
+        1 (1)          0              −q_mid             ĥ          (ĥ refreshed each step)
+        """
+        n, arm = self.n, self.arm
+        self.dt_p = dt_p
+        self.eps_abs = float(eps_abs)
+        v_max = vector_setting(context.velocity_limits, n, "robot.velocity_limits", minimum=0.0)
+        tau_max = vector_setting(context.torque_limits, n, "robot.max_torque", minimum=0.0)
+        q_min = np.clip(np.asarray(arm.q_lower, dtype=float), -BIG, BIG)
+        q_max = np.clip(np.asarray(arm.q_upper, dtype=float), -BIG, BIG)
+        self.v_max, self.tau_max, self.q_min, self.q_max = v_max, tau_max, q_min, q_max
+        # the torque rows keep 2·eps_abs inside the clip: the solver's tolerance (and level 2's
+        # eps_abs margin) then never lets the command reach the clip the motors apply
+        if np.any(tau_max <= 4.0 * self.eps_abs):
+            raise ValueError(f"robot.max_torque must exceed 4·controller.eps_abs, got {tau_max.tolist()}")
+        half = np.concatenate([v_max, 0.5 * (q_max - q_min), tau_max - 2.0 * self.eps_abs])
+        self._tau_bound = tau_max - 2.0 * self.eps_abs
+        self._half = half
+        self._bounds = np.vstack([-half, half])
+        eye = np.eye(n)
+        T = np.zeros((3 * n + 1, 3 * n))
+        T[:n, :n], T[:n, n : 2 * n] = dt_p * eye, 0.5 * dt_p**2 * eye
+        T[n : 2 * n, n : 2 * n] = eye
+        T[2 * n : 3 * n, :n], T[2 * n : 3 * n, n : 2 * n] = eye, dt_p * eye
+        T[3 * n, n : 2 * n] = -0.5 * (q_min + q_max)
+        self._T = T
+        self._T_M = T[:n, 2 * n :]  # M (symmetric: Mᵀ = M)
+        self._T_state = T[n:]  # [q, v, 1] → offsets o
+        self._hhat = T[3 * n, 2 * n :]  # ĥ = h + friction feed-forward (a view)
+        self._Y = np.zeros((2, 3 * n + 1))  # rows [q̈, q, v, 1]: level-1 and final candidates
+        self._Y[:, 3 * n] = 1.0
+        self._X = self._Y[:, :n]
+        self._Y_q, self._Y_v = self._Y[:, n : 2 * n], self._Y[:, 2 * n : 3 * n]
+        self._to_qdd = np.concatenate(
+            [np.full(n, 1.0 / dt_p), np.full(n, 2.0 / dt_p**2), np.ones(n)]
+        )  # row scales: state units → q̈ units
+        self.level1 = QPLevel(n, 3 * n, eps_abs, "level1")
+        # Level 2's rows [N; N; M N] have rank n − 6 (1 for a 7-joint arm): with ProxQP's
+        # defaults (mu_in 0.1, eps_primal_inf 1e-4) and a start at a_null it declares some
+        # feasible instances infeasible; a start at a = 0 (feasible by construction, with an
+        # eps_abs margin), mu_in = 1e-2 and an infeasibility threshold below that margin do not.
+        self.level2 = QPLevel(n, 3 * n, eps_abs, "level2", mu_in=1e-2, eps_primal_inf=0.01 * eps_abs)
+        self._a_zero = np.zeros(n)
+        self.level1.C[: 2 * n] = np.vstack([eye, eye])
+        self.level2.H[:] = eye
+
+    # ------------------------------------------------------------------ per step
+    def compute(self, t: float, state: ArmModel, ref: Reference, wrench: np.ndarray) -> np.ndarray:
+        arm = state
+        J, M, Minv, q, v = arm.J, arm.M, arm.Minv, arm.q, arm.v
+        n = self.n
+
+        # contact magnitude F, stiffness K_r = s·K0, preload p
+        w_ext = wrench if self.observer is None else self.observer.update(state, wrench)
+        F = max(math.sqrt(w_ext.dot(w_ext)) - self.deadband, 0.0) if self.use_force_feedback else 0.0
+        s = stiffness_scale(F, self.K_min_ratio, self.k_alpha)
+        preload = self.preload.update(F)
+
+        # Λ⁻¹ = J M⁻¹ Jᵀ; Λ^½ and Λ from its eigendecomposition; D_r into its buffer
+        JMinv = J.dot(Minv)
+        lam_inv = JMinv.dot(J.T)
+        lam = self._task_inertia(lam_inv, s)
+
+        # F_r = [D_r, K_r]·[ν_d − ν; x_d − x; −log3(R R_dᵀ)] + F_pre, b = ν̇_d − J̇v + Λ⁻¹F_r
+        z = self._z
+        np.subtract(ref.twist, arm.twist, out=self._z_twist)
+        np.subtract(ref.pos, arm.pos, out=self._z_pos)
+        self._z_rot[:] = pin.log3(ref.rot.dot(arm.rot_T))
+        F_r = z.dot(self._DK)
+        if preload:
+            F_r[:3] += preload * self.axis
+        b = lam_inv.dot(F_r)
+        b += ref.accel
+        b -= arm.Jdot_v
+
+        # closed forms: level 1 q̈ = Jᵀ(J Jᵀ + εI)⁻¹ b (min-norm least squares), level 2 a = a_null
+        X = self._X
+        JJ = self._JJ
+        np.dot(J, J.T, out=JJ)
+        JJ += self._reg6
+        chol, info = _dpotrf(JJ)
+        if info == 0:
+            w = math.prod(chol.diagonal().tolist())  # √det(J Jᵀ)
+            if self._inertia_metric:  # M⁻¹Jᵀ(J M⁻¹Jᵀ + εI)⁻¹ b: minimises ‖Jq̈ − b‖² + ε q̈ᵀMq̈
+                np.dot(_dposv(lam_inv + self._reg6, b)[1], JMinv, out=X[0])
+            else:
+                np.dot(_dpotrs(chol, b)[0], J, out=X[0])
+        else:
+            w = 0.0
+            X[0] = np.linalg.lstsq(J, b, rcond=None)[0]
+        a_null = self._null_task(J, Minv, q, v, w, chol if info == 0 else None)
+        # final candidate q̈ + N a_null, N a = a − M⁻¹JᵀΛJ a
+        np.subtract(a_null, lam.dot(J.dot(a_null)).dot(JMinv), out=self._Na)
+        np.add(X[0], self._Na, out=X[1])
+
+        # both candidates against every row at once: Z = [q̈, q, v, 1]·T
+        self._Y_q[:] = q
+        self._Y_v[:] = v
+        self._T_M[:] = M
+        hhat = self._hhat
+        hhat[:] = arm.h
+        Z = self._Y.dot(self._T)  # torque rows: τ_pre = M q̈ + h
+        if self.friction.active:  # ĥ = h + feed-forward of the final candidate's τ_pre
+            ff = self.friction(Z[1, 2 * n :], v)
+            Z[:, 2 * n :] += ff
+            hhat += ff
+        within = np.abs(Z) <= self._half
+        if within.all() and not self.solve_every_step:
+            self._fast_steps += 1
+            tau = Z[1, 2 * n :]  # M(q̈ + N a) + ĥ (a fresh array)
+        else:
+            tau = self._solve_levels(J, M, Minv, JMinv, lam, b, a_null, bool(within[0].all()))
+
+        if self.observer is not None:
+            self.observer.command(tau)
+        k = self.steps
+        if k < self._rec_len:
+            rec = self._rec[k]
+            rec[0], rec[1], rec[2], rec[3] = F, s, preload, w
+        self.steps = k + 1
+        return tau
+
+    def _task_inertia(self, lam_inv: np.ndarray, s: float) -> np.ndarray:
+        """Λ from Λ⁻¹ = V diag(λ) Vᵀ (λ floored at λ_max/condition_threshold); writes
+        D_r and K_r = s·K0 into the buffer [D_r, K_r]. Returns Λ.
+
+        D_r = Λ^½K_r^½ + K_r^½Λ^½ has entries (Λ^½)_ij (k_i + k_j), k = √s·√K0, so
+        D_r = √s·(Λ^½ ∘ P) with the constant P_ij = √K0_i + √K0_j.
+        """
+        eigval, V, _ = _dsyevd(lam_inv)
+        top, low = eigval[-1], eigval[0]
+        if low * self.lambda_max_condition < top:  # a new largest condition number
+            self.lambda_max_condition = top / low if low > 0.0 else math.inf
+        if low * self.threshold < top:  # also when low ≤ 0
+            self._floor(eigval)
+        root = np.sqrt(eigval, out=eigval)
+        Vs = V / root  # V diag(λ^-½)
+        lam_sqrt = Vs.dot(V.T)  # Λ^½
+        D = self._D
+        np.multiply(lam_sqrt, self._P, out=D)  # D_r/√s
+        if _dpotrf(D.T)[1] != 0:  # not positive definite: damp each mode critically instead
+            self.modal_damping_steps += 1
+            D[:] = modal_damping(lam_sqrt, (V * root).dot(V.T), self.K0)
+        D *= math.sqrt(s)
+        np.multiply(self.K0, s, out=self._K_diag)
+        return Vs.dot(Vs.T)
+
+    def _floor(self, eigval: np.ndarray) -> None:
+        """Lift Λ⁻¹'s eigenvalues (ascending) to λ_max/threshold; count the step."""
+        top = eigval[-1]
+        self.lambda_floor_steps += 1
+        np.maximum(eigval, max(top, 1e-300) / self.threshold, out=eigval)
+
+    def _null_task(self, J, Minv, q, v, w: float, chol) -> np.ndarray:
+        """a_null = k_sa q̈_sa + k_ji q̈_ji (Eq. 38-42)."""
+        a_null = self._a_null
+        np.subtract(self.q_home, q, out=a_null)
+        a_null *= self.posture_K
+        a_null -= self.posture_D * v
+        if w < self.omega_th and chol is not None and self.k_sa > 0.0:
+            self.singularity_steps += 1
+            direction = manipulability_gradient(J, _dpotrs(chol, J)[0], 1.0)  # ∇w/w
+            if self._inertia_metric:
+                direction = Minv.dot(direction)
+            norm = math.sqrt(direction.dot(direction))
+            if norm > 0.0:
+                a_null += (self.k_sa * (self.omega_th - w) / (self.omega_th * norm)) * direction
+        return a_null
+
+    def _solve_levels(self, J, M, Minv, JMinv, lam, b, a_null, ok1: bool) -> np.ndarray:
+        """The constrained path: the QP of each level whose closed form violates a row."""
+        n, L1, L2, X = self.n, self.level1, self.level2, self._X
+        # bounds in q̈ units: [I; I; M] q̈ ∈ (±half − o) ⊙ row scales, o = [q, v, 1]·T_state
+        np.subtract(self._bounds, self._Y[0, n:].dot(self._T_state), out=L1.lu)
+        L1.lu *= self._to_qdd
+        if ok1 and not self.solve_every_step:
+            L1.closed_form += 1
+            qdd = X[0]
+        else:
+            np.dot(J.T, J, out=L1.H)
+            if self._inertia_metric:
+                L1.H += REGULARISER * M
+            else:
+                L1.H.flat[:: n + 1] += REGULARISER
+            np.negative(b.dot(J), out=L1.g)
+            L1.C[2 * n :] = M
+            if not self._box_feasible(L1.lu) or not L1.solve(X[0]):
+                self.level1_fallbacks += 1
+                self.level2_zero_steps += 1
+                return M.dot(X[0]) + self._hhat  # unconstrained least squares, no level 2
+            qdd = L1.x
+            if not self.solve_every_step:  # q̈* + N a_null may satisfy every row: done
+                X[1] = qdd + self._Na
+                Z = self._Y[1].dot(self._T)
+                if (np.abs(Z) <= self._half).all():
+                    L2.closed_form += 1
+                    return Z[2 * n :]
+        # level 2: [I; I; M](q̈* + N a) within the same bounds, N = I − M⁻¹JᵀΛJ
+        JtLJ = J.T.dot(lam.dot(J))
+        N = L2.C[:n]
+        np.subtract(np.eye(n), Minv.dot(JtLJ), out=N)
+        L2.C[n : 2 * n] = N
+        np.subtract(M, JtLJ, out=L2.C[2 * n :])
+        rows = qdd.dot(self._T[:n]) * self._to_qdd  # [I; I; M] q̈*
+        np.subtract(L1.lu, rows, out=L2.lu)
+        # a = 0 stays strictly feasible: level 2 is not asked to repair level 1's residual
+        # (≤ eps_abs), and rows active at level 1 keep a margin of eps_abs (with a zero-width
+        # side, the rank-deficient rows make ProxQP report false infeasibility)
+        np.minimum(L2.l, -self.eps_abs, out=L2.l)
+        np.maximum(L2.u, self.eps_abs, out=L2.u)
+        np.negative(a_null, out=L2.g)
+        tau = M.dot(qdd)
+        if L2.solve(self._a_zero, update_H=False):
+            tau += L2.C[2 * n :].dot(L2.x)
+        else:
+            self.level2_zero_steps += 1
+        tau += self._hhat
+        # a solved QP meets its torque rows to eps_abs; keep the last 1e-5 N·m inside too
+        return np.clip(tau, -self._tau_bound, self._tau_bound, out=tau)
+
+    def _box_feasible(self, lu: np.ndarray) -> bool:
+        """Whether the velocity and position rows of each joint (both bounds on q̈_i) overlap;
+        if not, level 1 is infeasible without asking ProxQP (counted as a failure)."""
+        n = self.n
+        if (np.maximum(lu[0, :n], lu[0, n : 2 * n]) <= np.minimum(lu[1, :n], lu[1, n : 2 * n])).all():
+            return True
+        self.level1.failures += 1
+        self.level1.infeasible_box += 1
+        return False
+
+    # ------------------------------------------------------------------ after the run
+    def diagnostics(self) -> dict:
+        out = {
+            "lambda_fallback_steps": self.lambda_floor_steps,
+            "lambda_max_condition": float(self.lambda_max_condition),
+            "hqp_modal_damping_steps": self.modal_damping_steps,
+            "hqp_level1_fallbacks": self.level1_fallbacks,
+            "hqp_level2_zero_steps": self.level2_zero_steps,
+            "hqp_singularity_steps": self.singularity_steps,
+            "hqp_force_source": self.force_source.value,
+        }
+        out.update(self.level1.diagnostics(self._fast_steps))
+        out.update(self.level2.diagnostics(self._fast_steps))
+        if self.observer is not None:
+            out.update(self.observer.errors())
+        return out
+
+    def timeseries(self) -> dict[str, np.ndarray]:
+        rec = self._rec[: self.steps]
+        out = {
+            "hqp_F": rec[:, 0],
+            "hqp_K_r": rec[:, 1:2] * self.K0,  # columns hqp_K_r_1 … hqp_K_r_6
+            "hqp_preload": rec[:, 2],
+            "hqp_manipulability": rec[:, 3],
+        }
+        if self.observer is not None:
+            out.update(self.observer.timeseries())
+        return out

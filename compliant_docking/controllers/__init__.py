@@ -1,1 +1,0 @@
-"""Controllers: one module per ``controller=`` option, shared pieces in :mod:`.base`."""

@@ -1,0 +1,170 @@
+"""Table-10 docking metrics (Ren & Shan 2026, seed ``DockingMetrics``), seat state and the docking gate.
+
+Computed after the loop from the run's time series (see :mod:`compliant_docking.sim.telemetry`).
+Every value is a float, an int or None: None means it cannot be computed (no data, no
+joint with a finite limit, …), never a made-up number; a non-finite value becomes None.
+
+Conventions (docs/metrics.md):
+- ``axis`` is the unit docking axis (direction of insertion, world).
+- axial force = −f·axis, with f the measured force ON the tool: positive when the plug
+  presses along the insertion direction (the socket pushes back).
+- the steady window is the last ``steady_window`` seconds of the run.
+- joint indices (``*_joint``) are 0-based, as in the seed.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+import pinocchio as pin
+
+from compliant_docking.evaluation.registry import DOCKING_KEYS, finite_or_none
+from compliant_docking.sim.telemetry import (
+    FORCE,
+    ORI_ERROR,
+    POSITION,
+    POSITION_REF,
+    QUATERNION,
+    WRENCH,
+    axial_force,
+)
+
+#: the values of :func:`compute_metrics` (registry keys), None = cannot be computed
+DockingMetrics = dict[str, float | int | None]
+
+
+def steady_mask(t: np.ndarray, window: float) -> np.ndarray:
+    return t >= t[-1] - window if t.size else np.zeros(0, dtype=bool)
+
+
+def compute_metrics(
+    ts: pd.DataFrame,
+    *,
+    axis: np.ndarray,
+    q_lower: np.ndarray,
+    q_upper: np.ndarray,
+    velocity_limits: np.ndarray,
+    manipulability: np.ndarray | None,
+    steady_window: float = 2.0,
+) -> DockingMetrics:
+    """Table-10 metrics of a run's time series, keyed as in the registry (``DOCKING_KEYS``).
+
+    ``manipulability``: √det(J Jᵀ) per step (world Jacobian of the TCP), or None.
+    """
+    if ts.empty:
+        return dict.fromkeys(DOCKING_KEYS)
+    axis = np.asarray(axis, dtype=float)
+    axis = axis / np.linalg.norm(axis)
+    t = ts["t"].to_numpy()
+    steady = steady_mask(t, steady_window)
+    nv = len(q_lower)
+
+    axial = axial_force(ts[FORCE].to_numpy(), axis)
+    wrench_norm = np.linalg.norm(ts[WRENCH].to_numpy(), axis=1)
+
+    q = ts[[f"q{i + 1}" for i in range(nv)]].to_numpy()
+    v = ts[[f"v{i + 1}" for i in range(nv)]].to_numpy()
+    pos_pct, pos_joint = _max_pct(np.abs(q - (q_upper + q_lower) / 2), (q_upper - q_lower) / 2)
+    vel_pct, vel_joint = _max_pct(np.abs(v), np.asarray(velocity_limits, dtype=float))
+
+    pos_err = ts[POSITION].to_numpy() - ts[POSITION_REF].to_numpy()
+    lateral = pos_err - np.outer(pos_err @ axis, axis)
+    ori_norm = np.linalg.norm(ts[ORI_ERROR].to_numpy(), axis=1)
+
+    values = dict(
+        peak_axial_force_N=np.max(np.abs(axial)),
+        peak_wrench_norm_N=np.max(wrench_norm),
+        steady_axial_force_N=np.mean(axial[steady]),
+        steady_wrench_norm_N=np.mean(wrench_norm[steady]),
+        max_joint_pos_pct=pos_pct,
+        max_joint_vel_pct=vel_pct,
+        min_manipulability=None if manipulability is None else np.min(manipulability),
+        pos_tracking_rms_m=np.sqrt(np.mean(ts["pos_error"].to_numpy() ** 2)),
+        ori_tracking_rms_rad=np.sqrt(np.mean(ori_norm**2)),
+        final_lateral_error_m=np.mean(np.linalg.norm(lateral, axis=1)[steady]),
+        final_orientation_error_rad=np.mean(ori_norm[steady]),
+        max_joint_pos_joint=pos_joint,
+        max_joint_vel_joint=vel_joint,
+    )
+    assert set(values) == set(DOCKING_KEYS), "compute_metrics and the registry disagree"
+    return {k: finite_or_none(values[k]) for k in DOCKING_KEYS}
+
+
+def _max_pct(values: np.ndarray, limits: np.ndarray) -> tuple[float | None, int | None]:
+    """Largest values/limit in % over joints with a finite positive limit, and its joint."""
+    valid = np.isfinite(limits) & (limits > 0.0)
+    if not valid.any() or values.size == 0:
+        return None, None
+    pct = np.where(valid, values / np.where(valid, limits, 1.0), -np.inf) * 100.0
+    peak_per_joint = pct.max(axis=0)
+    joint = int(np.argmax(peak_per_joint))
+    return float(peak_per_joint[joint]), joint
+
+
+def manipulability_series(arm, q: np.ndarray) -> np.ndarray:
+    """√det(J Jᵀ) of the TCP's world Jacobian at each row of q."""
+    data = arm.model.createData()
+    out = np.empty(len(q))
+    for k, qk in enumerate(q):
+        J = arm.world_jacobian(qk, data)
+        out[k] = np.sqrt(max(float(np.linalg.det(J @ J.T)), 0.0))
+    return out
+
+
+# --------------------------------------------------------------------------- docking gate
+@dataclass(frozen=True)
+class SeatState:
+    """The plug tip relative to the TRUE socket seat, over the steady window (maxima)."""
+
+    depth_error_m: float | None  # |axial distance tip ↔ seat|
+    lateral_error_m: float | None  # distance of the tip from the socket axis
+    tilt_deg: float | None  # angle between plug axis and socket axis
+    seated_time_s: float | None  # first time the tip came within depth tolerance of the seat
+
+
+def seat_state(ts: pd.DataFrame, seat: pin.SE3, steady_window: float, depth_tolerance: float) -> SeatState:
+    """Where the plug ended up, measured on the physics' (true) socket pose."""
+    if ts.empty:
+        return SeatState(None, None, None, None)
+    t = ts["t"].to_numpy()
+    steady = steady_mask(t, steady_window)
+    rel = (ts[POSITION].to_numpy() - seat.translation) @ seat.rotation  # seat frame
+    quat = ts[QUATERNION].to_numpy()
+    plug_axis = _quat_z_axis(quat)
+    # inserted plug: its +z is the socket's −z
+    cos_tilt = np.clip(-(plug_axis @ seat.rotation[:, 2]), -1.0, 1.0)
+    tilt = np.degrees(np.arccos(cos_tilt))
+    depth = np.abs(rel[:, 2])
+    lateral = np.linalg.norm(rel[:, :2], axis=1)
+    seated = np.flatnonzero(depth <= depth_tolerance)
+    return SeatState(
+        depth_error_m=finite_or_none(depth[steady].max()),
+        lateral_error_m=finite_or_none(lateral[steady].max()),
+        tilt_deg=finite_or_none(tilt[steady].max()),
+        seated_time_s=float(t[seated[0]]) if seated.size else None,
+    )
+
+
+def _quat_z_axis(quat_wxyz: np.ndarray) -> np.ndarray:
+    """Third column of the rotation matrix of each wxyz quaternion."""
+    w, x, y, z = quat_wxyz.T
+    return np.stack([2 * (x * z + w * y), 2 * (y * z - w * x), 1 - 2 * (x * x + y * y)], axis=1)
+
+
+def docking_gate(seat: SeatState, metrics: DockingMetrics, gate) -> list[str]:
+    """Failing items of the docking gate (empty: success). Missing or non-finite values fail."""
+    checks = [
+        ("seat depth error", seat.depth_error_m, gate.depth_tolerance_m, "m"),
+        ("seat lateral error", seat.lateral_error_m, gate.lateral_tolerance_m, "m"),
+        ("plug tilt", seat.tilt_deg, gate.tilt_tolerance_deg, "deg"),
+        ("peak axial force", metrics["peak_axial_force_N"], gate.peak_force_budget_N, "N"),
+    ]
+    failures = []
+    for label, value, limit, unit in checks:
+        if value is None:
+            failures.append(f"{label} not available (non-finite or no data)")
+        elif value > limit:
+            failures.append(f"{label} {value:.4g} {unit} > {limit:g} {unit}")
+    return failures

@@ -1,0 +1,20 @@
+"""``trajectory=hold``: hold the start pose (push tests, compliance identification)."""
+
+from __future__ import annotations
+
+from compliant_docking.planning.base import Planner, Reference, Waypoints
+
+
+class HoldPlanner(Planner):
+    def __init__(self, waypoints: Waypoints, duration: float = 5.0, name: str = "hold"):
+        if not duration > 0.0:
+            raise ValueError(f"trajectory.duration must be > 0 s, got {duration}")
+        self.duration = float(duration)
+        self._pos = waypoints.start.translation.copy()
+        self._rot = waypoints.start.rotation.copy()
+
+    def sample(self, t: float, ref: Reference) -> None:
+        ref.pos[:] = self._pos
+        ref.rot[:] = self._rot
+        ref.twist[:] = 0.0
+        ref.accel[:] = 0.0

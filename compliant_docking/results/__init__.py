@@ -1,0 +1,46 @@
+"""Runs → pandas tables, comparisons and figures (the orchestration side; no MuJoCo).
+
+- :mod:`.load`: :func:`load_runs` (one row per job directory), :func:`scan`,
+  :func:`newest_sweep`;
+- :mod:`.tables`: the comparison table, counts, ``summary.md`` and the summary files;
+- :mod:`.figures`: comparison figures across runs;
+- :mod:`.report`: ``python -m compliant_docking.report PATH``.
+"""
+
+from compliant_docking.results.load import (
+    BASE_COLUMNS,
+    GROUPS,
+    RunSkippedWarning,
+    load_runs,
+    newest_sweep,
+    scan,
+)
+from compliant_docking.results.tables import (
+    Counts,
+    comparison_markdown,
+    comparison_table,
+    configuration_keys,
+    configuration_labels,
+    counts,
+    jobs_markdown,
+    summary_markdown,
+    write_summary,
+)
+
+__all__ = [
+    "BASE_COLUMNS",
+    "GROUPS",
+    "Counts",
+    "RunSkippedWarning",
+    "comparison_markdown",
+    "comparison_table",
+    "configuration_keys",
+    "configuration_labels",
+    "counts",
+    "jobs_markdown",
+    "load_runs",
+    "newest_sweep",
+    "scan",
+    "summary_markdown",
+    "write_summary",
+]

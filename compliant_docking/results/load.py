@@ -1,0 +1,119 @@
+"""Run directories → pandas: :func:`load_runs` and the sweep helpers built on it.
+
+``load_runs(path)`` finds every job directory under ``path`` (one run directory, a
+sweep directory, nested trees, or all of ``runs/``) and returns one row per finished
+job (see :func:`load_runs` for the columns). A directory is a *job directory* when it
+holds a ``metrics.json`` or a ``.hydra/`` folder; it is *finished* when its
+``metrics.json`` is a valid JSON object (the runner writes it last and atomically).
+Unfinished ones (no ``metrics.json``: still running, or the worker crashed) and broken
+ones (invalid JSON) are skipped with a :class:`RunSkippedWarning`, never an exception.
+
+Light on purpose (pandas, PyYAML, Hydra's override parser): no MuJoCo, no Pinocchio.
+"""
+
+from __future__ import annotations
+
+import os
+import warnings
+from collections.abc import Iterable
+from pathlib import Path
+
+import pandas as pd
+
+from compliant_docking.run.rundir import (
+    MULTIRUN_FILE,
+    find_job_dirs,
+    read_metrics,
+    read_overrides,
+)
+
+#: columns every frame of :func:`load_runs` has, first, in this order
+BASE_COLUMNS = ("run_dir", "job", "status", "error", "success")
+#: the config groups whose choice names a job (also recorded in metrics.json)
+GROUPS = ("robot", "controller", "trajectory", "tool", "target", "physics", "task", "experiment")
+
+
+class RunSkippedWarning(UserWarning):
+    """A job directory without a finished metrics.json was skipped."""
+
+
+# --------------------------------------------------------------------------- load_runs
+def load_runs(path: str | os.PathLike = "runs") -> pd.DataFrame:
+    """One row per finished job directory under ``path``.
+
+    Columns, in this order:
+
+    - ``run_dir`` (absolute path, str) and ``job`` (the directory's name);
+    - ``status`` ("ok", "incomplete", "failed"), ``error`` (None or one line),
+      ``success`` (bool, or None for runs without a gate);
+    - one column per command-line override of any job, named by its key without
+      Hydra's prefixes: ``controller``, ``robot``, ``target.geometry.radial_clearance``,
+      ``task.misalignment.seed``, ``experiment``, … (NaN/None where a job did not set it);
+    - every key of metrics.json: the config choices (``robot``, ``controller``,
+      ``trajectory``, … always set, whether overridden or not), ``overrides`` (the job's
+      overrides, space-separated), the Table-10 metrics (``peak_axial_force_N``, …),
+      seat errors, the drawn misalignment (``misalignment_x_m``, …), timing, controller
+      diagnostics. JSON null becomes None/NaN.
+
+    Where an override and a metrics.json key share a name (``controller``), the
+    metrics.json value (the choice the job used) is kept; they agree.
+
+    Directories without a finished metrics.json are skipped with a
+    :class:`RunSkippedWarning`. ``path`` must exist (FileNotFoundError otherwise); no
+    job found gives an empty frame with the base columns.
+    """
+    rows: list[dict] = []
+    override_keys: list[str] = []
+    metric_keys: list[str] = []
+    for job_dir in find_job_dirs(path):
+        record, problem = read_metrics(job_dir)
+        if record is None:
+            warnings.warn(f"skipping {job_dir}: {problem}", RunSkippedWarning, stacklevel=2)
+            continue
+        overrides = read_overrides(job_dir)
+        row = {"run_dir": str(job_dir.resolve()), "job": job_dir.name}
+        row.update(overrides)
+        row.update(record)
+        rows.append(row)
+        _extend_unique(override_keys, overrides)
+        _extend_unique(metric_keys, record)
+    columns = list(BASE_COLUMNS)
+    _extend_unique(columns, override_keys)
+    _extend_unique(columns, metric_keys)
+    frame = pd.DataFrame(rows, columns=columns)
+    for column in frame.columns:  # JSON numbers with nulls: numeric columns with NaN
+        if frame[column].dtype == object and column not in ("success",):
+            frame[column] = _maybe_numeric(frame[column])
+    return frame
+
+
+def _extend_unique(target: list[str], keys: Iterable[str]) -> None:
+    seen = set(target)
+    for key in keys:
+        if key not in seen:
+            target.append(key)
+            seen.add(key)
+
+
+def _maybe_numeric(column: pd.Series) -> pd.Series:
+    values = column.dropna()
+    if len(values) and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in values):
+        return pd.to_numeric(column, errors="coerce")
+    return column
+
+
+def scan(path: str | os.PathLike) -> tuple[pd.DataFrame, list[Path]]:
+    """``load_runs(path)`` without warnings, and the job directories it skipped."""
+    skipped = [d for d in find_job_dirs(path) if read_metrics(d)[0] is None]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RunSkippedWarning)
+        return load_runs(path), skipped
+
+
+def newest_sweep(root: str | os.PathLike = "runs/multirun") -> Path | None:
+    """The most recently modified sweep directory (one holding multirun.yaml) under ``root``."""
+    root = Path(root)
+    if not root.is_dir():
+        return None
+    sweeps = [p.parent for p in root.rglob(MULTIRUN_FILE)]
+    return max(sweeps, key=lambda p: p.stat().st_mtime) if sweeps else None

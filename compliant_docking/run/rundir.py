@@ -1,0 +1,196 @@
+"""The run directory: the names of its files, and their readers and writers (the one place).
+
+A job directory (docs/run_directory.md) holds::
+
+    metrics.json        flat JSON object, written last and atomically: its presence means
+                        "finished"; status, error, success, the metrics, provenance
+    timeseries.parquet  one row per control step (columns: compliant_docking.sim.telemetry)
+    summary.txt         the console summary
+    figures/            per-run figures (PNG + PDF)
+    .hydra/             Hydra's composed config, its own config and the overrides
+
+Every writer here replaces its file atomically (temporary name, then rename); readers
+never raise for what they find on disk, they say why a file cannot be read.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import shutil
+from collections.abc import Callable
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+import yaml
+
+from compliant_docking.evaluation.registry import finite_or_none
+from compliant_docking.run.files import atomic_write, atomic_write_text
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+METRICS_FILE = "metrics.json"
+TIMESERIES_FILE = "timeseries.parquet"
+SUMMARY_FILE = "summary.txt"
+FIGURES_DIR = "figures"
+HYDRA_DIR = ".hydra"
+CONFIG_FILE = "config.yaml"  # in HYDRA_DIR: the job's composed config
+OVERRIDES_FILE = "overrides.yaml"  # in HYDRA_DIR: the job's command-line overrides
+#: the sweep directory's record of the sweep (Hydra writes it)
+MULTIRUN_FILE = "multirun.yaml"
+
+
+# --------------------------------------------------------------------------- metrics.json
+def clean_record(record: dict) -> dict:
+    """The record with numpy scalars as Python numbers and non-finite numbers as None."""
+    return {
+        k: finite_or_none(v) if isinstance(v, (float, np.floating, np.integer)) else v
+        for k, v in record.items()
+    }
+
+
+def write_metrics(job_dir: Path, record: dict) -> None:
+    """metrics.json: a flat JSON object; non-finite numbers become null."""
+    text = json.dumps(clean_record(record), indent=2, allow_nan=False) + "\n"
+    atomic_write_text(Path(job_dir) / METRICS_FILE, text)
+
+
+def read_metrics(job_dir: Path) -> tuple[dict | None, str | None]:
+    """The job's metrics.json as a dict, or (None, why it cannot be read)."""
+    path = Path(job_dir) / METRICS_FILE
+    if not path.is_file():
+        return None, "no metrics.json (the job is still running, or its process died)"
+    try:
+        record = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        return None, f"metrics.json is not valid JSON (half-written?): {exc}"
+    if not isinstance(record, dict):
+        return None, "metrics.json is not a JSON object"
+    return record, None
+
+
+# --------------------------------------------------------------------------- other files
+def write_timeseries(job_dir: Path, frame: pd.DataFrame) -> None:
+    """timeseries.parquet (zstd-compressed, no index)."""
+    atomic_write(
+        Path(job_dir) / TIMESERIES_FILE, lambda tmp: frame.to_parquet(tmp, index=False, compression="zstd")
+    )
+
+
+def read_timeseries(job_dir: Path, columns: list[str] | None = None) -> pd.DataFrame:
+    """The job's time series (all columns, or ``columns``)."""
+    import pandas as pd
+
+    return pd.read_parquet(Path(job_dir) / TIMESERIES_FILE, columns=columns)
+
+
+def has_timeseries(job_dir: Path) -> bool:
+    return (Path(job_dir) / TIMESERIES_FILE).is_file()
+
+
+def write_summary_text(job_dir: Path, text: str) -> None:
+    atomic_write_text(Path(job_dir) / SUMMARY_FILE, text.rstrip("\n") + "\n")
+
+
+def write_figures(job_dir: Path, draw: Callable[[Path], object]) -> None:
+    """Draw the figures into a temporary folder with ``draw(folder)``, then put it in place
+    of ``figures/`` (a reader sees the old folder or the new one, never half of one)."""
+    job_dir = Path(job_dir)
+    tmp = job_dir / f".{FIGURES_DIR}.tmp"
+    shutil.rmtree(tmp, ignore_errors=True)
+    draw(tmp)
+    final = job_dir / FIGURES_DIR
+    shutil.rmtree(final, ignore_errors=True)
+    os.replace(tmp, final)
+
+
+def read_config(job_dir: Path) -> dict | None:
+    """The job's composed config (``.hydra/config.yaml``) as plain data, or None."""
+    try:
+        data = yaml.safe_load((Path(job_dir) / HYDRA_DIR / CONFIG_FILE).read_text(encoding="utf-8"))
+    except (OSError, yaml.YAMLError):
+        return None
+    return data if isinstance(data, dict) else None
+
+
+# --------------------------------------------------------------------------- finding jobs
+def is_job_dir(path: Path) -> bool:
+    """A job directory holds a metrics.json or a .hydra/ folder."""
+    return (Path(path) / METRICS_FILE).is_file() or (Path(path) / HYDRA_DIR).is_dir()
+
+
+def find_job_dirs(path: str | os.PathLike) -> list[Path]:
+    """Every job directory under ``path`` (``path`` itself included), in natural order.
+
+    A job directory holds a ``metrics.json`` or a ``.hydra/`` folder. Hidden folders
+    and the sub-folders of a job directory (``figures/``, ``.hydra/``) are not searched.
+    """
+    root = Path(path)
+    if root.is_file():
+        root = root.parent
+    if not root.is_dir():
+        raise FileNotFoundError(f"no such directory: {root}")
+    found: list[Path] = []
+    for current, dirs, files in os.walk(root):
+        here = Path(current)
+        if METRICS_FILE in files or HYDRA_DIR in dirs:
+            found.append(here)
+            dirs[:] = []  # a job directory holds no other jobs
+            continue
+        dirs[:] = [d for d in dirs if not d.startswith(".")]
+    return sorted(found, key=natural_key)
+
+
+def natural_key(path: Path) -> list:
+    """Sort key: digit runs compare as numbers (job 10 after job 9)."""
+    return [int(part) if part.isdigit() else part for part in re.split(r"(\d+)", str(path))]
+
+
+# --------------------------------------------------------------------------- overrides
+def read_overrides(job_dir: Path) -> dict[str, Any]:
+    """The job's command-line overrides (``.hydra/overrides.yaml``) as {key: value}.
+
+    Keys lose Hydra's ``+``/``++``/``~`` prefixes (``+experiment=x`` → ``experiment``);
+    values are parsed as Hydra does (``0.0004`` → float, ``hqp`` → str); lists and
+    dicts stay as their override text (``[0,0,-0.1]``) so a column keeps one type.
+    """
+    return dict(parse_override(line) for line in read_override_lines(job_dir))
+
+
+def read_override_lines(job_dir: Path) -> list[str]:
+    """The job's overrides as Hydra wrote them (``.hydra/overrides.yaml``); [] if none."""
+    path = Path(job_dir) / HYDRA_DIR / OVERRIDES_FILE
+    if not path.is_file():
+        return []
+    try:
+        lines = yaml.safe_load(path.read_text(encoding="utf-8")) or []
+    except (OSError, yaml.YAMLError):
+        return []
+    return [str(line) for line in lines] if isinstance(lines, list) else []
+
+
+def parse_override(text: str) -> tuple[str, Any]:
+    """One override string → (key, value); see :func:`read_overrides`."""
+    try:
+        from hydra.core.override_parser.overrides_parser import OverridesParser
+
+        override = OverridesParser.create().parse_override(text)
+        key = override.key_or_group
+        if override.package:
+            key = f"{key}@{override.package}"
+        if override.is_delete():
+            return key, None
+        value = override.value()
+        if isinstance(value, (list, dict)) or not _is_scalar(value):
+            value = override.get_value_element_as_str()
+        return key, value
+    except Exception:  # not Hydra syntax (hand-written file): split at the first '='
+        key, _, value = text.partition("=")
+        return key.lstrip("+~"), value
+
+
+def _is_scalar(value) -> bool:
+    return value is None or isinstance(value, (bool, int, float, str))

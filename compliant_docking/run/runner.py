@@ -1,0 +1,190 @@
+"""One job, from a composed config to a finished run directory.
+
+:func:`execute` never raises: whatever happens, the run directory ends with a
+``metrics.json`` whose ``status`` is "ok", "incomplete" (shorter than its trajectory)
+or "failed" (with ``error``: a one-line reason). Every file is written atomically
+(temporary name, then rename), and ``metrics.json`` last, so a directory holding a
+``metrics.json`` is finished. See docs/run_directory.md for the layout.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+import traceback
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from omegaconf import DictConfig, OmegaConf
+
+from compliant_docking.evaluation.registry import DOCKING_KEYS
+from compliant_docking.run import provenance, rundir
+from compliant_docking.run.summary import display_path, format_summary
+from compliant_docking.sim.misalignment import record_for as misalignment_record
+
+#: exit status of ``python -m compliant_docking``
+EXIT_SUCCESS, EXIT_FAILED, EXIT_GATE = 0, 1, 3
+
+
+def _one_line(exc: BaseException) -> str:
+    text = str(exc).strip().replace("\n", " ") or type(exc).__name__
+    return text if isinstance(exc, (ValueError, RuntimeError)) else f"{type(exc).__name__}: {text}"
+
+
+def execute(cfg: DictConfig, out_dir: Path, *, figures: bool = True, echo: bool = True) -> dict:
+    """Run the job of ``cfg`` into ``out_dir``; returns the metrics record (never raises).
+
+    The record starts with the fields naming the job (config choices, overrides).
+    """
+    from compliant_docking.sim.simulate import Diverged, prepare
+
+    started = time.perf_counter()
+    started_at = provenance.now_iso()
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    record: dict = {"status": "failed", "error": None, "success": False, **job_identity(cfg)}
+    record.update(dict.fromkeys(DOCKING_KEYS))
+    record.update(misalignment_record(cfg))  # true vs believed socket pose (flat keys)
+    sim = None
+    try:
+        show: Any = None
+        if cfg.get("viewer"):  # MuJoCo's viewer at real time; refused in a sweep or without a display
+            from compliant_docking.viz import viewer as show
+
+            show.check_allowed()
+        sim = prepare(cfg)
+        sim.run(progress=bool(cfg.task.progress) and echo, on_step=show.RealTimeViewer(sim) if show else None)
+        record.update(evaluate(sim, out_dir, figures=figures))
+    except Diverged as exc:
+        record["error"] = str(exc)
+    except Exception as exc:  # a job records its own failure; the sweep goes on
+        record["error"] = _one_line(exc)
+        if not isinstance(exc, ValueError):
+            traceback.print_exc(file=sys.stderr)
+    if sim is not None:
+        steps = sim.telemetry.count
+        record["sim_time_s"] = steps * sim.scene.model.opt.timestep
+        record["steps"] = steps
+        record["real_time_factor"] = (
+            record["sim_time_s"] / sim.loop_wall_time if sim.loop_wall_time > 0 else None
+        )
+        record["loop_wall_time_s"] = sim.loop_wall_time or None
+        record.update(sim.controller.diagnostics())
+    if cfg.get("render") is not None and cfg.render.name != "none":  # docking.mp4 (render.py)
+        from compliant_docking.viz.render import record_video
+
+        record.update(record_video(sim, cfg, out_dir))  # never raises: video_error says why
+    record["wall_time_s"] = time.perf_counter() - started
+    record.update(provenance.collect(cfg, started_at=started_at))  # versions, git, config hash
+    if record["status"] == "failed":
+        record["success"] = False
+    summary = format_summary(record, cfg) + f"\n  run directory: {display_path(out_dir)}"
+    if "video_error" in record:  # render=video: the video, or why there is none
+        from compliant_docking.viz.render import summary_line
+
+        summary += summary_line(record)
+    rundir.write_summary_text(out_dir, summary)
+    rundir.write_metrics(out_dir, record)  # last: its presence means "finished"
+    if echo:
+        print(summary)
+    return record
+
+
+def evaluate(sim, out_dir: Path, *, figures: bool) -> dict:
+    """Metrics, gate, time series and figures of a finished simulation (the record's
+    fields they fill); writes the time series and the figures into ``out_dir``."""
+    from compliant_docking.evaluation import docking as M
+
+    cfg, arm = sim.cfg, sim.scene.arm
+    extras = sim.controller.timeseries()
+    ts = sim.telemetry.frame(arm, sim.reference, np.asarray(cfg.robot.max_torque, float), extras)
+    manip = M.manipulability_series(arm, sim.telemetry.q[: sim.telemetry.count])
+    axis = sim.waypoints.axis
+    docking = M.compute_metrics(
+        ts,
+        axis=axis,
+        q_lower=arm.q_lower,
+        q_upper=arm.q_upper,
+        velocity_limits=np.asarray(cfg.robot.velocity_limits, float),
+        manipulability=manip,
+        steady_window=float(cfg.task.steady_window),
+    )
+    result: dict[str, Any] = dict(docking)
+    result["contacts_max"] = int(ts["contacts"].max()) if len(ts) else None
+    result["torque_saturation_ratio"] = float(ts["torque_saturated"].mean()) if len(ts) else None
+
+    # The gate: docking runs → the docking gate; free-space runs of the tracking planner →
+    # the tracking gate; other free-space runs (hold, …) have no gate: success is null.
+    from compliant_docking.planning.tracking import TrackingPlanner
+
+    failures: list[str] = []
+    gated = True
+    complete = sim.complete
+    if sim.scene.socket is not None:
+        seat = M.seat_state(
+            ts, sim.scene.socket.true, float(cfg.task.steady_window), float(cfg.task.gate.depth_tolerance_m)
+        )
+        result.update(
+            seat_depth_error_m=seat.depth_error_m,
+            seat_lateral_error_m=seat.lateral_error_m,
+            seat_tilt_deg=seat.tilt_deg,
+            seated_time_s=seat.seated_time_s,
+        )
+        failures = M.docking_gate(seat, docking, cfg.task.gate)
+    elif isinstance(sim.planner, TrackingPlanner):
+        from compliant_docking.evaluation.tracking_gate import tracking_gate
+
+        gate = tracking_gate(ts, sim.planner.segments, cfg.task.tracking_gate, complete=complete)
+        result.update(gate.record())
+        failures = list(gate.failures)
+    else:
+        gated = False
+    if not complete:
+        failures = sim.notes + failures
+    result["status"] = "ok" if complete else "incomplete"
+    result["success"] = (complete and not failures) if gated else None
+    result["gate_failures"] = "; ".join(failures) or None
+
+    rundir.write_timeseries(out_dir, ts)
+    if figures:
+        from compliant_docking.viz.plotting import plot_run
+
+        title = f"{cfg.robot.name} · {cfg.controller.name} · {cfg.trajectory.name}"
+        rundir.write_figures(
+            out_dir,
+            lambda folder: plot_run(
+                ts, folder, axis=axis, torque_limits=np.asarray(cfg.robot.max_torque, float), title=title
+            ),
+        )
+    return result
+
+
+def exit_status(record: dict) -> int:
+    """0: succeeded, or finished with no gate to pass (success null); 1: failed; 3: gate not passed."""
+    if record.get("status") == "failed":
+        return EXIT_FAILED
+    if record.get("status") == "ok" and record.get("success") is None:
+        return EXIT_SUCCESS
+    return EXIT_SUCCESS if record.get("success") else EXIT_GATE
+
+
+def job_identity(cfg: DictConfig) -> dict:
+    """The config choices and overrides that name a job (Hydra's runtime info if present)."""
+    identity: dict[str, Any] = {}
+    try:
+        from hydra.core.hydra_config import HydraConfig
+
+        hc = HydraConfig.get()
+        choices: Any = OmegaConf.to_container(hc.runtime.choices)
+        identity["overrides"] = " ".join(hc.overrides.task) or None
+    except ValueError:  # not running under Hydra
+        choices = {}
+    for group in ("robot", "controller", "trajectory", "tool", "target", "physics", "task"):
+        identity[group] = choices.get(group) or _name(cfg, group)
+    return identity
+
+
+def _name(cfg: DictConfig, group: str):
+    node = cfg.get(group)
+    return node.get("name") if node is not None else None

@@ -1,0 +1,63 @@
+"""The console summary of one run (also saved as ``summary.txt``): the registry's metrics by
+section, then the status, the gate's verdict and what failed."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from omegaconf import DictConfig
+
+from compliant_docking.evaluation import registry
+from compliant_docking.evaluation.tracking_gate import summary_rows as tracking_rows
+
+RULE_WIDTH = 64
+#: sections always shown; the seat section only for docking runs (or a failed one)
+ALWAYS = (registry.CONTACT, registry.INTERNAL, registry.TRACKING)
+
+
+def format_summary(record: dict, cfg: DictConfig | None = None) -> str:
+    """A short aligned summary of a run for the console."""
+    r = record.get
+    title = ""
+    if cfg is not None:
+        title = f"{cfg.robot.name} · {cfg.controller.name} · {cfg.trajectory.name} · {cfg.physics.name}"
+
+    def section(name: str, heading: str | None = None) -> list[tuple[str, str | None]]:
+        return [(f"[{heading or name}]", None)] + [
+            (m.label, m.format(record)) for m in registry.in_section(name)
+        ]
+
+    rows: list[tuple[str, str | None]] = []
+    for name in ALWAYS:
+        rows += section(name)
+    if r("seat_depth_error_m") is not None or (r("gate_failures") and r("tracking_gate") is None):
+        rows += section(registry.SEAT, "seat, true socket pose")
+    if r("tracking_gate") is not None:  # the free-space tracking gate
+        rows += tracking_rows(record)
+    rows += section(registry.RUN)
+    width = max(len(label) for label, value in rows if value is not None)
+    lines = ["=" * RULE_WIDTH, f"compliant-docking: {title}".rstrip(": "), "=" * RULE_WIDTH]
+    for label, value in rows:
+        lines.append(label if value is None else f"  {label:<{width}} : {value}")
+    status = r("status")
+    verdict = "success" if r("success") else ("FAILED" if status == "failed" else "not docked")
+    if status != "failed" and r("tracking_gate") is not None:
+        verdict = f"tracking gate {r('tracking_gate')}"
+    elif status != "failed" and r("success") is None:
+        verdict = "no gate"
+    success = "null" if r("success") is None else str(bool(r("success"))).lower()
+    lines.append("-" * RULE_WIDTH)
+    lines.append(f"  status {status} · success {success} ({verdict})")
+    if r("error"):
+        lines.append(f"  error: {r('error')}")
+    if r("gate_failures"):
+        lines.append(f"  gate: {r('gate_failures')}")
+    return "\n".join(lines)
+
+
+def display_path(path: Path) -> str:
+    """The path relative to the working directory when it lies below it."""
+    try:
+        return str(Path(path).resolve().relative_to(Path.cwd().resolve()))
+    except ValueError:
+        return str(path)

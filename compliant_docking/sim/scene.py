@@ -1,0 +1,279 @@
+"""Scene assembly: robot MJCF + tool fragment + target fragment + glue → MjModel.
+
+The recipe follows the seed's ``Scene.build_mjmodel``:
+
+1. the arm spec is loaded from the robot's MJCF;
+2. the tool's root body ``dock`` is posed relative to the flange site
+   (``tool.mount_pos``/``mount_quat``) and attached there with ``tool.prefix``;
+3. the target's root body ``dock`` is attached to a world frame at the socket's TRUE
+   pose (the planner may believe another one, see :class:`SocketPose`);
+4. floor, light, tracking camera and sensors (force and torque at the tool's
+   ``sensor_site``) are added after the attaches;
+5. the physics options are set on the final spec (attach may carry the fragments'
+   options along), then the spec is compiled.
+
+Fragments: a root body named ``dock``; the tool must also carry a site ``sensor_site``
+and may carry a site ``tcp`` (the controlled point, default the ``dock`` origin). The
+tool must be rigid (no joints): its inertia is appended to Pinocchio's flange body.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+import pinocchio as pin
+from omegaconf import DictConfig, OmegaConf
+
+from compliant_docking import resolve_path
+from compliant_docking.config.geometry import check_fit
+from compliant_docking.sim.geometry import build_plug, build_socket
+from compliant_docking.sim.misalignment import Misalignment, draw
+from compliant_docking.sim.models import ArmModel, RigidTool, mount_placement
+
+CAMERA = "track_cam"
+
+
+@dataclass(frozen=True)
+class SocketPose:
+    """Where the socket's seat frame is (physics) and where the planner believes it is."""
+
+    true: pin.SE3
+    believed: pin.SE3
+    misalignment: Misalignment = Misalignment()  # true = believed · misalignment.apply
+
+
+@dataclass
+class Scene:
+    """The compiled simulation and the matching Pinocchio arm."""
+
+    model: mujoco.MjModel
+    arm: ArmModel
+    socket: SocketPose | None
+    force_adr: int  # sensordata address of the force sensor; the torque sensor follows
+    tool_body: int  # MuJoCo id of the tool's root body
+    sensor_site: int  # MuJoCo id of the tool's sensor site
+    tcp_site: int  # MuJoCo id of the TCP site
+    gravity: np.ndarray
+
+
+def _fragment_error(kind: str, source: str, problem: str) -> ValueError:
+    return ValueError(
+        f"{kind} fragment {source}: {problem}. A {kind} fragment must contain a root body "
+        f"named 'dock'"
+        + (
+            " and a site named 'sensor_site' (the force/torque sensor anchor); a site 'tcp' is optional"
+            if kind == "tool"
+            else ""
+        )
+        + "."
+    )
+
+
+def _load_fragment(kind: str, node: DictConfig) -> tuple[mujoco.MjSpec, str]:
+    """The fragment's spec: from ``node.mjcf`` if set, else generated from its geometry."""
+    if node.mjcf:
+        path = resolve_path(node.mjcf)
+        if not path.is_file():
+            raise ValueError(f"{kind}.mjcf: no such file {path}")
+        try:
+            spec = mujoco.MjSpec.from_file(str(path))
+        except Exception as exc:  # MuJoCo parse errors
+            raise _fragment_error(kind, str(path), f"MuJoCo cannot parse it ({exc})") from None
+        source = str(path)
+    else:
+        geom = OmegaConf.to_object(node.geometry)
+        if kind == "tool":
+            spec = build_plug(geom)  # type: ignore[arg-type]  # a PlugGeometry: its schema
+        else:
+            spec = build_socket(geom, OmegaConf.to_object(node.contact))  # type: ignore[arg-type]
+        source = f"{kind}={node.name} (parametric)"
+    if spec.body("dock") is None:
+        raise _fragment_error(kind, source, "no body named 'dock'")
+    if kind == "tool" and spec.site("sensor_site") is None:
+        raise _fragment_error(kind, source, "no site named 'sensor_site'")
+    return spec, source
+
+
+def rigid_tool(spec: mujoco.MjSpec, source: str) -> RigidTool:
+    """Mass properties and frames of a tool fragment, expressed in its ``dock`` frame."""
+    root = spec.body("dock")
+    root.pos, root.quat = [0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0]
+    model = spec.compile()
+    if model.njnt:
+        raise _fragment_error("tool", source, "it has joints; the tool must be rigid")
+    data = mujoco.MjData(model)
+    mujoco.mj_kinematics(model, data)
+    mujoco.mj_comPos(model, data)
+    bodies = range(1, model.nbody)
+    mass = float(sum(model.body_mass[b] for b in bodies))
+    if mass <= 0.0:
+        raise _fragment_error("tool", source, "it has no mass")
+    com = sum(model.body_mass[b] * data.xipos[b] for b in bodies) / mass
+    inertia = np.zeros((3, 3))
+    for b in bodies:
+        rot = data.ximat[b].reshape(3, 3)
+        offset = data.xipos[b] - com
+        inertia += rot @ np.diag(model.body_inertia[b]) @ rot.T
+        inertia += model.body_mass[b] * (offset @ offset * np.eye(3) - np.outer(offset, offset))
+
+    def site_se3(name: str) -> pin.SE3:
+        sid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SITE, name)
+        if sid < 0:
+            return pin.SE3.Identity()
+        return pin.SE3(data.site_xmat[sid].reshape(3, 3).copy(), data.site_xpos[sid].copy())
+
+    return RigidTool(mass=mass, com=com, inertia=inertia, tcp=site_se3("tcp"), sensor=site_se3("sensor_site"))
+
+
+def socket_pose(cfg: DictConfig) -> SocketPose | None:
+    """The socket's nominal (believed) and physical (true) seat pose in the world.
+
+    believed = ``target.pos``/``target.quat``; true = believed · the misalignment of
+    ``task.misalignment`` (fixed or drawn with its seed; compliant_docking/misalignment.py).
+    """
+    offset = draw(cfg.task.get("misalignment"))
+    if cfg.target.name == "none":
+        if not offset.is_zero:
+            raise ValueError("task.misalignment needs a socket (target=none has none)")
+        return None
+    nominal = mount_placement(cfg.target.pos, cfg.target.quat)
+    return SocketPose(true=offset.apply(nominal), believed=nominal, misalignment=offset)
+
+
+def _add_glue(spec: mujoco.MjSpec, tool_prefix: str, socket: SocketPose | None) -> None:
+    """Floor, light, tracking camera, and a pedestal under the socket (visual only)."""
+    world = spec.worldbody
+    spec.add_texture(
+        name="grid",
+        type=mujoco.mjtTexture.mjTEXTURE_2D,
+        builtin=mujoco.mjtBuiltin.mjBUILTIN_CHECKER,
+        width=256,
+        height=256,
+        rgb1=[0.82, 0.84, 0.86],
+        rgb2=[0.72, 0.74, 0.77],
+    )
+    floor_mat = spec.add_material(name="groundplane", texrepeat=[4, 4])
+    floor_mat.textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = "grid"
+    world.add_geom(
+        name="floor",
+        type=mujoco.mjtGeom.mjGEOM_PLANE,
+        size=[2.0, 2.0, 0.05],
+        material="groundplane",
+        contype=0,
+        conaffinity=0,
+    )
+    world.add_light(
+        name="sun",
+        pos=[0.0, 0.0, 2.5],
+        dir=[0.0, 0.0, -1.0],
+        type=mujoco.mjtLightType.mjLIGHT_DIRECTIONAL,
+        diffuse=[0.8, 0.8, 0.8],
+    )
+    look_at = socket.true.translation if socket is not None else np.array([0.5, 0.0, 0.3])
+    world.add_camera(
+        name=CAMERA,
+        pos=(look_at + np.array([0.45, 0.9, 0.35])).tolist(),
+        mode=mujoco.mjtCamLight.mjCAMLIGHT_TARGETBODY,
+        targetbody=f"{tool_prefix}dock",
+    )
+    if socket is not None and socket.true.translation[2] > 0.02:
+        height = float(socket.true.translation[2]) - 0.01
+        world.add_geom(
+            name="pedestal",
+            type=mujoco.mjtGeom.mjGEOM_CYLINDER,
+            size=[0.05, height / 2, 0.0],
+            pos=[*socket.true.translation[:2], height / 2],
+            rgba=[0.35, 0.36, 0.4, 1],
+            contype=0,
+            conaffinity=0,
+            group=1,
+        )
+
+
+def _set_physics(spec: mujoco.MjSpec, physics: DictConfig) -> None:
+    opt = spec.option
+    opt.timestep = float(physics.timestep)
+    opt.gravity = [float(g) for g in physics.gravity]
+    opt.integrator = int(physics.integrator.value)
+    opt.cone = int(physics.cone.value)
+    opt.iterations = int(physics.iterations)
+    opt.tolerance = float(physics.tolerance)
+    opt.sdf_iterations = int(physics.sdf_iterations)
+    opt.sdf_initpoints = int(physics.sdf_initpoints)
+    if not physics.midphase:
+        opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_MIDPHASE)
+
+
+def build_scene(cfg: DictConfig) -> Scene:
+    """Assemble and compile the scene of ``cfg`` and build the matching Pinocchio arm."""
+    robot_path = resolve_path(cfg.robot.mjcf)
+    if not robot_path.is_file():
+        raise ValueError(f"robot.mjcf: no such file {robot_path}")
+    arm_spec = mujoco.MjSpec.from_file(str(robot_path))
+    ee_site = arm_spec.site(cfg.robot.ee_site)
+    if ee_site is None:
+        raise ValueError(f"robot.ee_site {cfg.robot.ee_site!r} is not a site of {robot_path}")
+
+    # Tool: its mass properties first (from a standalone copy), then attach it posed
+    # relative to the flange site: attach interprets the body pose in the site frame.
+    tool_spec, source = _load_fragment("tool", cfg.tool)
+    tool = rigid_tool(tool_spec, source)
+    tool_spec, _ = _load_fragment("tool", cfg.tool)
+    mount = mount_placement(cfg.tool.mount_pos, cfg.tool.mount_quat)
+    tool_root = tool_spec.body("dock")
+    tool_root.pos = mount.translation.tolist()
+    tool_root.quat = pin.Quaternion(mount.rotation).coeffs()[[3, 0, 1, 2]].tolist()
+    ee_site.attach_body(tool_root, prefix=cfg.tool.prefix)
+    tcp_name = f"{cfg.tool.prefix}tcp"
+    if arm_spec.site(tcp_name) is None:  # fragment without a tcp site: the dock origin
+        arm_spec.body(f"{cfg.tool.prefix}dock").add_site(name=tcp_name)
+
+    socket = socket_pose(cfg)
+    if socket is not None:
+        if not cfg.tool.mjcf and not cfg.target.mjcf:
+            check_fit(OmegaConf.to_object(cfg.tool.geometry), OmegaConf.to_object(cfg.target.geometry))  # type: ignore[arg-type]
+        target_spec, _ = _load_fragment("target", cfg.target)
+        quat = pin.Quaternion(socket.true.rotation).coeffs()[[3, 0, 1, 2]]
+        frame = arm_spec.worldbody.add_frame(
+            name="target_frame", pos=socket.true.translation.tolist(), quat=quat.tolist()
+        )
+        frame.attach_body(target_spec.body("dock"), prefix=cfg.target.prefix)
+
+    _add_glue(arm_spec, cfg.tool.prefix, socket)
+    sensor_site = f"{cfg.tool.prefix}sensor_site"
+    arm_spec.add_sensor(
+        name="force_sensor",
+        type=mujoco.mjtSensor.mjSENS_FORCE,
+        objtype=mujoco.mjtObj.mjOBJ_SITE,
+        objname=sensor_site,
+    )
+    arm_spec.add_sensor(
+        name="torque_sensor",
+        type=mujoco.mjtSensor.mjSENS_TORQUE,
+        objtype=mujoco.mjtObj.mjOBJ_SITE,
+        objname=sensor_site,
+    )
+    _set_physics(arm_spec, cfg.physics)
+    model = arm_spec.compile()
+
+    if model.sensor("torque_sensor").adr[0] != model.sensor("force_sensor").adr[0] + 3:
+        raise RuntimeError("force and torque sensors must be adjacent in sensordata")
+    if model.nu != model.nv:
+        raise ValueError(
+            f"robot.mjcf {robot_path}: expected one motor per joint, found "
+            f"{model.nu} actuators for {model.nv} joints"
+        )
+    gravity = np.asarray(cfg.physics.gravity, dtype=float)
+    arm = ArmModel(robot_path, cfg.robot.ee_site, mount, tool, gravity)
+    return Scene(
+        model=model,
+        arm=arm,
+        socket=socket,
+        force_adr=int(model.sensor("force_sensor").adr[0]),
+        tool_body=model.body(f"{cfg.tool.prefix}dock").id,
+        sensor_site=model.site(sensor_site).id,
+        tcp_site=model.site(tcp_name).id,
+        gravity=gravity,
+    )

@@ -1,0 +1,245 @@
+"""The simulation: build everything for a config, then the loop
+
+    read state → reference → measured wrench → torque → clip → mj_step → record.
+
+:func:`prepare` builds the scene, the Pinocchio arm, the start posture, the planner and
+the controller (heavy objects are made here, inside the job, never at import time).
+:meth:`Simulation.run` runs the loop and returns the :class:`Telemetry`; it stops early,
+raising :class:`Diverged`, if the physics blows up.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import mujoco
+import numpy as np
+import pinocchio as pin
+from hydra.utils import instantiate
+from omegaconf import DictConfig
+
+from compliant_docking.planning.base import (
+    Planner,
+    PressHome,
+    Reference,
+    ReferenceTable,
+    Waypoints,
+)
+from compliant_docking.sim.context import ControlContext, StepController
+from compliant_docking.sim.scene import Scene, build_scene
+from compliant_docking.sim.sensor import wrench_reader
+from compliant_docking.sim.task import run_duration, task_waypoints
+from compliant_docking.sim.telemetry import Telemetry
+
+#: joint speed regarded as an exploding state [rad/s]
+EXPLODING_SPEED = 100.0
+#: steps between divergence checks
+CHECK_EVERY = 50
+#: what the log copies from MuJoCo each step, in this order
+STATE_LOGGED = int(mujoco.mjtState.mjSTATE_QPOS | mujoco.mjtState.mjSTATE_QVEL | mujoco.mjtState.mjSTATE_CTRL)
+
+
+class Diverged(RuntimeError):
+    """The physics became non-finite or exploded; the message says when and why."""
+
+
+@dataclass
+class Simulation:
+    cfg: DictConfig
+    scene: Scene
+    data: mujoco.MjData
+    q0: np.ndarray
+    waypoints: Waypoints
+    planner: Planner
+    controller: StepController
+    duration: float
+    n_steps: int
+    telemetry: Telemetry
+    loop_wall_time: float = 0.0
+    notes: list[str] = field(default_factory=list)
+    reference: ReferenceTable | None = None  # the planner's table, made by run()
+
+    @property
+    def complete(self) -> bool:
+        """Whether the run covers the whole planned trajectory."""
+        return self.telemetry.count * self.scene.model.opt.timestep >= self.planner.duration - 1e-9
+
+    def run(self, progress: bool = False, on_step: Callable[[int], None] | None = None) -> Telemetry:
+        """Simulate ``n_steps`` steps; raises :class:`Diverged` when the physics blows up.
+
+        ``on_step(k)``, if given, is called after step k's ``mj_step`` (``data`` then holds
+        the state at t = (k + 1)·dt), e.g. to pace an interactive viewer; None (the
+        default) costs one ``is not None`` test per step.
+
+        The torque clip is MuJoCo's actuator ``ctrlrange`` (set to ±robot.max_torque by the
+        scene), so the loop writes the command and the log keeps it; the applied torque
+        and the saturation flag follow from it after the loop.
+        """
+        model, data, arm = self.scene.model, self.data, self.scene.arm
+        log = self.telemetry
+        dt = model.opt.timestep
+        wrench = np.zeros(6)
+        read_wrench = wrench_reader(self.scene, data, wrench)
+        qpos, qvel, ctrl = data.qpos, data.qvel, data.ctrl
+        log_state, log_w, log_contacts = log.state, log.wrench, log.contacts
+        get_state, state_spec = mujoco.mj_getState, STATE_LOGGED
+        bad_qacc = data.warning[mujoco.mjtWarning.mjWARN_BADQACC]
+        reporter = _Progress(self.n_steps, dt, enabled=progress)
+        mj_step, update, compute = mujoco.mj_step, arm.update, self.controller.compute
+        start = time.perf_counter()
+        # The planner's work is part of the loop's time: its table of every step first.
+        self.reference = self.planner.table(np.arange(self.n_steps) * dt)
+        row, ref = self.reference.row, Reference()
+        for k in range(self.n_steps):
+            t = k * dt
+            update(qpos, qvel)
+            row(k, ref)
+            read_wrench()
+            tau = compute(t, arm, ref, wrench)
+            ctrl[:] = tau
+            get_state(model, data, log_state[k], state_spec)  # [q, v, command]
+            log_w[k] = wrench
+            log_contacts[k] = data.ncon
+            mj_step(model, data)
+            if on_step is not None:
+                on_step(k)
+            if k % CHECK_EVERY == 0:
+                log.count = k + 1
+                if (
+                    bad_qacc.number
+                    or not np.isfinite(qvel).all()
+                    or np.abs(qvel).max() > EXPLODING_SPEED
+                    or not np.isfinite(tau).all()
+                ):
+                    raise Diverged(_divergence_reason(t, qvel, tau, bad_qacc.number))
+                reporter.update(k)
+        log.count = self.n_steps
+        self.loop_wall_time = time.perf_counter() - start
+        reporter.done()
+        return log
+
+
+def _divergence_reason(t: float, qvel: np.ndarray, tau: np.ndarray, bad_qacc: int) -> str:
+    if not np.isfinite(tau).all():
+        what = "the controller returned a non-finite torque"
+    elif bad_qacc:
+        what = "MuJoCo reported a non-finite or huge joint acceleration"
+    elif not np.isfinite(qvel).all():
+        what = "joint velocities became non-finite"
+    else:
+        what = f"a joint speed reached {np.abs(qvel).max():.3g} rad/s (limit {EXPLODING_SPEED:g})"
+    return f"simulation diverged at t = {t:.3f} s: {what}"
+
+
+class _Progress:
+    """A light progress indicator on stderr (one update per simulated second)."""
+
+    def __init__(self, n_steps: int, dt: float, enabled: bool):
+        self.enabled = enabled
+        self.n_steps, self.dt = n_steps, dt
+        self.every = max(int(round(1.0 / dt)), 1)
+        self.tty = sys.stderr.isatty()
+        self.start = time.perf_counter()
+
+    def update(self, k: int) -> None:
+        if not self.enabled or k % self.every or not self.tty:
+            return
+        elapsed = time.perf_counter() - self.start
+        sys.stderr.write(
+            f"\r  simulating {k * self.dt:6.1f} / {self.n_steps * self.dt:.1f} s"
+            f"  ({k * self.dt / max(elapsed, 1e-9):5.1f}× real time)"
+        )
+        sys.stderr.flush()
+
+    def done(self) -> None:
+        if self.enabled and self.tty:
+            sys.stderr.write("\r" + " " * 60 + "\r")
+            sys.stderr.flush()
+
+
+def prepare(cfg: DictConfig) -> Simulation:
+    """Build scene, arm, start posture, planner and controller for ``cfg``."""
+    scene = build_scene(cfg)
+    model, arm = scene.model, scene.arm
+    nv = model.nv
+    for key in ("velocity_limits", "torque_limits", "max_torque", "ik_guess"):
+        if len(cfg.robot[key]) != nv:
+            raise ValueError(
+                f"robot.{key} has {len(cfg.robot[key])} values; robot {cfg.robot.name} has {nv} joints"
+            )
+    if np.any(np.asarray(cfg.robot.max_torque, float) <= 0.0):
+        raise ValueError(f"robot.max_torque must be > 0 for every joint, got {list(cfg.robot.max_torque)}")
+
+    waypoints = task_waypoints(cfg, scene)
+    # _partial_: the config's parameters are bound first, the run-time objects passed
+    # directly (instantiate would otherwise turn dataclass arguments into dicts)
+    # the `trajectory` config group chooses the planner
+    planner = instantiate(cfg.trajectory, _partial_=True, _convert_="all")(waypoints=waypoints)
+    overshoot = float(cfg.task.insertion_overshoot)
+    if waypoints.goal is not None and overshoot != 0.0:
+        if not 0.0 < cfg.task.press_duration <= cfg.task.settle_time:
+            raise ValueError(
+                f"task.press_duration ({cfg.task.press_duration:g} s) must be > 0 and "
+                f"at most task.settle_time ({cfg.task.settle_time:g} s): the press "
+                f"happens after the planned motion, while the run settles"
+            )
+        planner = PressHome(planner, overshoot * waypoints.axis, cfg.task.press_duration)
+    duration, notes = run_duration(cfg, planner)
+    ref = Reference()
+    planner.sample(0.0, ref)
+    q0 = arm.solve_ik(pin.SE3(ref.rot.copy(), ref.pos.copy()), np.asarray(cfg.robot.ik_guess, dtype=float))
+
+    data = mujoco.MjData(model)
+    data.qpos[:] = q0
+    data.qvel[:] = 0.0
+    mujoco.mj_forward(model, data)
+    n_steps = int(round(duration / model.opt.timestep))
+    context = ControlContext(
+        arm=arm,
+        dt=float(model.opt.timestep),
+        n_steps=n_steps,
+        q_home=q0.copy(),
+        velocity_limits=np.asarray(cfg.robot.velocity_limits, dtype=float),
+        torque_limits=np.asarray(cfg.robot.max_torque, dtype=float),
+        joint_friction=model.dof_frictionloss.copy(),
+        joint_damping=model.dof_damping.copy(),
+        axis=waypoints.axis,
+    )
+    controller = instantiate(cfg.controller, _partial_=True, _convert_="all")(context=context)
+    limits = context.torque_limits
+    model.actuator_ctrlrange[:] = np.column_stack([-limits, limits])  # the software clip
+    return Simulation(
+        cfg=cfg,
+        scene=scene,
+        data=data,
+        q0=q0,
+        waypoints=waypoints,
+        planner=planner,
+        controller=controller,
+        duration=duration,
+        n_steps=n_steps,
+        telemetry=Telemetry(n_steps, nv, model.opt.timestep),
+        notes=notes,
+    )
+
+
+def replay_physics(sim: Simulation) -> float:
+    """Re-simulate the recorded torques with physics only; returns the loop's wall time [s].
+
+    Same start state, same torque sequence, hence the same contacts: the denominator of
+    the benchmark's loop/physics ratio.
+    """
+    model = sim.scene.model
+    data = mujoco.MjData(model)
+    data.qpos[:] = sim.q0
+    mujoco.mj_forward(model, data)
+    torques = sim.telemetry.tau_cmd[: sim.telemetry.count]
+    ctrl, mj_step = data.ctrl, mujoco.mj_step
+    start = time.perf_counter()
+    for tau in torques:
+        ctrl[:] = tau
+        mj_step(model, data)
+    return time.perf_counter() - start

@@ -1,0 +1,84 @@
+"""The task's geometry: start and goal poses of the TCP and the docking axis, and the run length."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+from omegaconf import DictConfig
+
+from compliant_docking.planning.base import Planner, Waypoints
+from compliant_docking.sim.scene import Scene
+
+
+def task_waypoints(cfg: DictConfig, scene: Scene) -> Waypoints:
+    """Start and goal TCP poses and the docking axis, from the socket pose the planner believes.
+
+    Without ``task.init_quat`` the plug points along the socket axis into the socket;
+    its roll about that axis (free: the interface is axisymmetric) is the roll of the TCP
+    at ``robot.ik_guess``, so the start posture needs no wrist turn.
+    """
+    task = cfg.task
+    stroke = np.asarray(task.stroke, dtype=float)
+    length = float(np.linalg.norm(stroke))
+    guess = scene.arm.tcp_placement(np.asarray(cfg.robot.ik_guess, dtype=float)).rotation
+    if scene.socket is None:
+        if task.init_pos is None:
+            raise ValueError(
+                "task.init_pos must be set when there is no target (target=none): "
+                "the start pose cannot be derived from a socket"
+            )
+        rot = (
+            _quat_matrix(task.init_quat, "task.init_quat")
+            if task.init_quat is not None
+            else _with_axis(guess, np.array([0.0, 0.0, -1.0]))
+        )  # plug pointing down
+        axis = stroke / length if length > 0 else rot[:, 2]
+        return Waypoints(start=pin.SE3(rot, np.asarray(task.init_pos, float)), goal=None, axis=axis)
+
+    if not length > 0.0:
+        raise ValueError(f"task.stroke must be a non-zero vector, got {stroke.tolist()}")
+    axis = stroke / length
+    seat = scene.socket.believed
+    if task.init_pos is None:
+        start_pos = seat.translation - stroke
+    else:
+        start_pos = np.asarray(task.init_pos, dtype=float)
+    rot = (
+        _with_axis(guess, -seat.rotation[:, 2])
+        if task.init_quat is None
+        else _quat_matrix(task.init_quat, "task.init_quat")
+    )
+    return Waypoints(start=pin.SE3(rot, start_pos), goal=pin.SE3(rot, start_pos + stroke), axis=axis)
+
+
+def _with_axis(rot: np.ndarray, z_axis: np.ndarray) -> np.ndarray:
+    """The rotation whose z axis is ``z_axis``, closest in roll to ``rot``."""
+    z = z_axis / np.linalg.norm(z_axis)
+    x = rot[:, 0] - (rot[:, 0] @ z) * z
+    if np.linalg.norm(x) < 1e-6:  # rot's x lies along z: use its y for the roll instead
+        x = np.cross(rot[:, 1] - (rot[:, 1] @ z) * z, z)
+    x /= np.linalg.norm(x)
+    return np.column_stack([x, np.cross(z, x), z])
+
+
+def _quat_matrix(quat, setting: str) -> np.ndarray:
+    q = np.asarray(quat, dtype=float)
+    if q.shape != (4,) or not np.isfinite(q).all() or abs(np.linalg.norm(q) - 1.0) > 1e-6:
+        raise ValueError(f"{setting} must be a unit quaternion [w, x, y, z], got {list(quat)}")
+    return pin.Quaternion(q[0], q[1], q[2], q[3]).matrix()
+
+
+def run_duration(cfg: DictConfig, planner: Planner) -> tuple[float, list[str]]:
+    """The run length: task.duration if set, else the planner's duration + settle_time."""
+    notes: list[str] = []
+    if cfg.task.duration is None:
+        return planner.duration + float(cfg.task.settle_time), notes
+    duration = float(cfg.task.duration)
+    if not duration > 0.0:
+        raise ValueError(f"task.duration must be > 0 s (or null to follow the trajectory), got {duration}")
+    if duration < planner.duration:
+        notes.append(
+            f"task.duration = {duration:g} s is shorter than the trajectory "
+            f"({planner.duration:.3g} s): the run is incomplete"
+        )
+    return duration, notes

@@ -1,0 +1,123 @@
+"""The sweep's Hydra callback (``hydra.callbacks.sweep`` in conf/config.yaml).
+
+With the joblib launcher the jobs run in loky worker processes, so the launching
+process never sees their records; everything reads the sweep directory:
+
+- when the sweep starts (launching process), :meth:`SweepCallback.on_multirun_start`
+  checks a resume (:mod:`.resume`), opens the sweep in the
+  :class:`~compliant_docking.sweep.session.SweepSession` and prints a header;
+- after each job, in the worker that ran it, :meth:`SweepCallback.on_job_end` prints one
+  progress line (:func:`~compliant_docking.sweep.progress.job_line`); on the submitit
+  launchers the jobs print into their own logs, so the launching process prints the
+  lines (:class:`~compliant_docking.sweep.progress.ProgressWatcher`);
+- when the sweep ends (launching process), :meth:`SweepCallback.on_multirun_end` writes
+  the summary and prints the counts (:mod:`.summary`). A sweep cut short (a worker
+  process died: joblib raises ``TerminatedWorkerError`` and Hydra aborts, skipping
+  ``on_multirun_end``; or Ctrl-C, SIGTERM) is summarised by the command line through
+  :meth:`SweepSession.finish_aborted`.
+
+This module is imported by the launching process and by every worker: keep it light.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from hydra.experimental.callback import Callback
+from omegaconf import DictConfig
+
+from compliant_docking.sweep import resume
+from compliant_docking.sweep.launchers import describe, is_submitit
+from compliant_docking.sweep.progress import ProgressWatcher, display, emit, job_line
+from compliant_docking.sweep.session import SweepSession
+
+
+def expected_jobs(config: DictConfig) -> int | None:
+    """How many jobs Hydra's basic sweeper will launch for ``config`` (None if unknown)."""
+    try:
+        from hydra._internal.core_plugins.basic_sweeper import BasicSweeper
+        from hydra.core.override_parser.overrides_parser import OverridesParser
+
+        sweeper = config.hydra.sweeper
+        if not str(sweeper.get("_target_", "")).endswith("BasicSweeper"):
+            return None
+        params = [f"{k}={v}" for k, v in (sweeper.get("params") or {}).items()]
+        params += list(config.hydra.overrides.task)
+        overrides = OverridesParser.create().parse_overrides(params)
+        batches = BasicSweeper.split_arguments(overrides, None)
+        return sum(len(batch) for batch in batches)
+    except Exception:  # e.g. glob() sweeps need the config loader: count unknown
+        return None
+
+
+def _workers(config: DictConfig) -> str:
+    """'on 2 worker processes', or how else the launcher runs the jobs."""
+    described = describe(config.hydra.launcher)
+    if described:
+        return described
+    n_jobs = config.hydra.launcher.get("n_jobs")
+    if n_jobs is None:
+        return "one after another in this process"
+    n_jobs = int(n_jobs)
+    if n_jobs < 0:
+        import joblib
+
+        n_jobs = max(joblib.cpu_count() + 1 + n_jobs, 1)
+    return f"on {n_jobs} worker process{'es' if n_jobs != 1 else ''}"
+
+
+class SweepCallback(Callback):
+    """Progress lines and the end-of-sweep summary (see the module docstring).
+
+    ``figures``: also draw the comparison figures into ``<sweep>/comparison/`` at the end.
+    ``progress``: print one line per finished job.
+    ``resume``: the sweep resumes the one in its directory (set by ``resume=<sweep dir>``).
+    """
+
+    def __init__(self, figures: bool = True, progress: bool = True, resume: bool = False) -> None:
+        self.figures = bool(figures)
+        self.progress = bool(progress)
+        self.resume = bool(resume)
+        self.total: int | None = None  # set in the parent, carried to the workers by pickle
+
+    # -- parent process
+    def on_multirun_start(self, config: DictConfig, **kwargs: Any) -> None:
+        resumed: list[str] = []
+        if self.resume:  # before anything is written; SystemExit passes Hydra's callback guard
+            try:
+                resumed = resume.check_sweep(config)
+            except resume.ResumeError as exc:
+                raise SystemExit(resume.fail(exc)) from None
+        self.total = expected_jobs(config)
+        sweep_dir = Path(str(config.hydra.sweep.dir))
+        independent = is_submitit(config.hydra.launcher)
+        session = SweepSession.current()
+        session.begin(sweep_dir, self.total, independent_jobs=independent)
+        jobs = "?" if self.total is None else str(self.total)
+        emit(f"sweep: {jobs} jobs {_workers(config)} → {display(sweep_dir)}")
+        for line in resumed:
+            emit(line)
+        if independent and self.progress:  # the jobs print into their own log files
+            session.watch(ProgressWatcher(sweep_dir, self.total))
+
+    def on_multirun_end(self, config: DictConfig, **kwargs: Any) -> None:
+        SweepSession.current().finish(Path(str(config.hydra.sweep.dir)), figures=self.figures)
+
+    # -- worker process, after each job
+    def on_job_end(self, config: DictConfig, job_return: Any, **kwargs: Any) -> None:
+        from hydra.types import RunMode
+
+        if not self.progress or config.hydra.mode != RunMode.MULTIRUN:
+            return
+        try:
+            from hydra.core.utils import JobStatus
+
+            out_dir = Path(str(config.hydra.runtime.output_dir))
+            sweep_dir = Path(str(config.hydra.sweep.dir)).resolve()
+            line = job_line(out_dir, sweep_dir, self.total)
+            if job_return.status == JobStatus.COMPLETED and job_return.return_value == resume.SKIPPED:
+                line = f"{line} · {resume.SKIPPED}"
+            emit(line)
+        except Exception as exc:  # progress must never fail a job
+            emit(f"(progress line failed: {exc})")

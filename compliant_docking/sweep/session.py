@@ -1,0 +1,98 @@
+"""The state of the sweep a launching process runs, as one explicit object.
+
+The command line (:mod:`compliant_docking.cli`) opens a :class:`SweepSession` around
+Hydra's run; Hydra instantiates the sweep callback from the config, and the callback
+finds the session through :func:`SweepSession.current` (a context variable: the session
+exists exactly while the command runs, and a test can open its own). The session
+records what the sweep is (directory, job count, launcher, start time, the submitit
+progress watcher) and, at the end, its :class:`~compliant_docking.sweep.summary.SweepOutcome`;
+the command line reads the outcome for its exit status, or summarises an aborted sweep.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import time
+from collections.abc import Iterator
+from contextvars import ContextVar
+from dataclasses import dataclass
+from pathlib import Path
+
+from compliant_docking.sweep.progress import ProgressWatcher
+from compliant_docking.sweep.summary import SweepOutcome, summarise
+
+_CURRENT: ContextVar[SweepSession | None] = ContextVar("compliant_docking_sweep", default=None)
+
+
+@dataclass
+class SweepSession:
+    """One sweep of the launching process (see the module docstring)."""
+
+    sweep_dir: Path | None = None
+    total: int | None = None  # jobs to run, None: unknown
+    started: float | None = None  # time.perf_counter() at the start
+    independent_jobs: bool = False  # submitit: jobs are processes that outlive the launcher
+    watcher: ProgressWatcher | None = None
+    outcome: SweepOutcome | None = None
+
+    @staticmethod
+    def current() -> SweepSession:
+        """The open session; a new one (opened now) if the command line opened none."""
+        session = _CURRENT.get()
+        if session is None:
+            session = SweepSession()
+            _CURRENT.set(session)
+        return session
+
+    @classmethod
+    @contextlib.contextmanager
+    def open(cls) -> Iterator[SweepSession]:
+        """A fresh session for the duration of a command."""
+        session = cls()
+        token = _CURRENT.set(session)
+        try:
+            yield session
+        finally:
+            session.stop_watcher()
+            _CURRENT.reset(token)
+
+    def begin(self, sweep_dir: Path, total: int | None, *, independent_jobs: bool) -> None:
+        """The sweep starts (the callback's ``on_multirun_start``)."""
+        self.sweep_dir, self.total = Path(sweep_dir), total
+        self.started, self.independent_jobs, self.outcome = time.perf_counter(), independent_jobs, None
+
+    def watch(self, watcher: ProgressWatcher) -> None:
+        self.watcher = watcher.start()
+
+    def stop_watcher(self) -> None:
+        watcher, self.watcher = self.watcher, None
+        if watcher is not None:
+            watcher.stop()
+
+    def finish(self, sweep_dir: Path, *, figures: bool, aborted: bool = False) -> SweepOutcome:
+        """Summarise the sweep (files, console counts) and keep its outcome."""
+        self.stop_watcher()
+        known = self.sweep_dir is not None and Path(sweep_dir) == self.sweep_dir
+        self.outcome = summarise(
+            sweep_dir,
+            figures=figures,
+            aborted=aborted,
+            total=self.total if known else None,
+            started=self.started,
+            independent_jobs=self.independent_jobs,
+        )
+        return self.outcome
+
+    def finish_aborted(self) -> SweepOutcome | None:
+        """Summarise a sweep that Hydra aborted (worker crash, Ctrl-C, SIGTERM); None when no
+        sweep started or it was summarised already."""
+        if self.sweep_dir is None or self.outcome is not None:
+            self.stop_watcher()
+            return None
+        try:
+            return self.finish(self.sweep_dir, figures=False, aborted=True)
+        except Exception as exc:  # never mask the original error
+            import sys
+
+            print(f"sweep: could not summarise the aborted sweep: {exc}", file=sys.stderr)
+            return None

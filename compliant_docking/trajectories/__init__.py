@@ -1,1 +1,0 @@
-"""Planners: one module per ``trajectory=`` option; each gives the reference at time t."""

@@ -1,0 +1,54 @@
+"""Shared controller pieces: task-space inertia with its fallback, friction feed-forward."""
+
+import numpy as np
+import pytest
+
+from compliant_docking.config import FrictionComp
+from compliant_docking.control.base import FrictionFeedForward, TaskInertia
+
+
+def test_task_inertia_solves_exactly_when_well_conditioned():
+    rng = np.random.default_rng(0)
+    J = rng.standard_normal((6, 7))
+    A = rng.standard_normal((7, 7))
+    Minv = np.linalg.inv(A @ A.T + 7 * np.eye(7))
+    rhs = rng.standard_normal(6)
+    inertia = TaskInertia(1e8)
+    for _ in range(12):  # across the conditioning checks
+        x = inertia.solve(J, J @ Minv, rhs)
+        assert np.allclose((J @ Minv @ J.T) @ x, rhs, atol=1e-10)
+    assert inertia.fallback_steps == 0
+    assert 1.0 < inertia.max_condition < 1e8
+
+
+def test_task_inertia_falls_back_at_a_singularity():
+    rng = np.random.default_rng(1)
+    J = rng.standard_normal((6, 7))
+    J[5] = J[4]  # two identical task rows: J M⁻¹ Jᵀ is singular
+    Minv = np.eye(7)
+    inertia = TaskInertia(1e6)
+    x = inertia.solve(J, J @ Minv, np.ones(6))
+    assert np.all(np.isfinite(x))
+    assert inertia.fallback_steps == 1
+    # the damped inverse caps the condition number at the threshold
+    damped = inertia.damped(J @ Minv @ J.T)
+    eig = np.linalg.eigvalsh(damped)
+    assert eig.max() / eig.min() <= 1.0001e6
+
+
+def test_task_inertia_rejects_a_meaningless_threshold():
+    with pytest.raises(ValueError, match="condition_threshold"):
+        TaskInertia(0.5)
+
+
+def test_friction_feedforward_modes():
+    f = np.array([1.0, 0.0, 0.5])
+    b = np.array([0.2, 0.0, 0.1])
+    v = np.array([0.3, 1.0, -0.02])
+    tau = np.array([-4.0, 2.0, 0.1])
+    torque = FrictionFeedForward(f, b, FrictionComp.torque)(tau, v)
+    assert np.allclose(torque, f * np.tanh(2 * tau / np.where(f > 0, f, 1)) + b * v)
+    assert torque[1] == 0.0  # a joint without friction gets nothing
+    velocity = FrictionFeedForward(f, b, FrictionComp.velocity)(tau, v)
+    assert np.allclose(velocity, f * np.tanh(v / 0.01) + b * v)
+    assert not FrictionFeedForward(np.zeros(3), np.zeros(3), FrictionComp.torque).active

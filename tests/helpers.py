@@ -1,0 +1,79 @@
+"""Shared test helpers: composed configs (no run directory), the command line, sweeps, and
+a push on the tool."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from compliant_docking import REPO_ROOT
+from compliant_docking.config import load_config
+
+#: the composed config for some overrides, exactly as the CLI would build it
+make_cfg = load_config
+
+
+def run_cli(*args: str, cwd: Path | None = None, timeout: float = 300) -> subprocess.CompletedProcess:
+    """``python -m compliant_docking args…`` in a subprocess, from the repository root."""
+    env = {**os.environ, "PYTHONUNBUFFERED": "1"}
+    return subprocess.run(
+        [sys.executable, "-m", "compliant_docking", *args],
+        cwd=cwd or REPO_ROOT,
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        env=env,
+    )
+
+
+def push_at_tcp(sim, force=(0.0, 0.0, 0.0), moment=(0.0, 0.0, 0.0)) -> None:
+    """A wrench acting at the TCP (world axes), applied through the tool body's
+    ``xfrc_applied``. MuJoCo applies that at the body's centre of mass, so the moment gets
+    r × F. Uses the kinematics already in ``sim.data`` (``prepare`` leaves them current).
+    """
+    data, scene = sim.data, sim.scene
+    r = data.site_xpos[scene.tcp_site] - data.xipos[scene.tool_body]
+    force, moment = np.asarray(force, float), np.asarray(moment, float)
+    data.xfrc_applied[scene.tool_body, :3] = force
+    data.xfrc_applied[scene.tool_body, 3:] = moment + np.cross(r, force)
+
+
+#: the tests folder (on PYTHONPATH for helpers a sweep's workers must import)
+TESTS = Path(__file__).parent
+#: short jobs: 1 s of motion + 1 s of settling (2 000 steps)
+SHORT_SWEEP = (
+    "controller=impedance",
+    "trajectory=quintic",
+    "trajectory.duration=1",
+    "task.settle_time=1",
+    "task.progress=false",
+)
+
+
+def sweep_cli(
+    sweep_dir: Path, *args: str, pythonpath: Path | None = None, timeout: float = 300
+) -> subprocess.CompletedProcess:
+    """``python -m compliant_docking -m args…`` with 2 workers into ``sweep_dir``."""
+    env = {**os.environ, "PYTHONUNBUFFERED": "1"}
+    if pythonpath is not None:
+        env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(pythonpath), env.get("PYTHONPATH")]))
+    return subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "compliant_docking",
+            "-m",
+            *args,
+            f"hydra.sweep.dir={sweep_dir}",
+            "hydra.launcher.n_jobs=2",
+        ],
+        cwd=REPO_ROOT,
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        env=env,
+    )

@@ -1,0 +1,148 @@
+"""End to end: the default scene docks, the run directory is complete, failures are clean."""
+
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from compliant_docking.evaluation.registry import DOCKING_KEYS
+from compliant_docking.run.runner import execute
+from tests.helpers import make_cfg, run_cli
+
+REQUIRED = {
+    "status",
+    "error",
+    "success",
+    "sim_time_s",
+    "wall_time_s",
+    "real_time_factor",
+    "seat_depth_error_m",
+    "seat_lateral_error_m",
+    "seat_tilt_deg",
+    "gate_failures",
+    "robot",
+    "controller",
+    "trajectory",
+    *DOCKING_KEYS,
+}
+
+
+@pytest.mark.parametrize("physics", ["space", "earth"])
+def test_default_scene_docks(tmp_path, physics):
+    record = execute(
+        make_cfg(f"physics={physics}", "task.progress=false"), tmp_path, figures=False, echo=False
+    )
+    assert record["status"] == "ok" and record["error"] is None
+    assert record["success"] is True, record["gate_failures"]
+    assert record["seat_depth_error_m"] < 1e-3  # seated
+    assert record["seat_lateral_error_m"] < 0.4e-3 + 1e-4  # inside the bore's clearance
+    assert 1.0 < record["peak_axial_force_N"] < 50.0  # it touched, and not violently
+    # pressed home by the 5 mm press of the reference past the seat: k · 5 mm
+    assert record["steady_axial_force_N"] == pytest.approx(50.0 * 0.005, rel=0.1)
+    assert record["sim_time_s"] == pytest.approx(18.0)
+    text = (tmp_path / "metrics.json").read_text()
+    assert REQUIRED <= json.loads(text).keys()
+    assert "NaN" not in text and "Infinity" not in text
+
+
+def test_cli_run_writes_the_run_directory(tmp_path):
+    run_dir = tmp_path / "run"
+    result = run_cli(f"hydra.run.dir={run_dir}", "task.progress=false")
+    assert result.returncode == 0, result.stderr[-2000:]
+    assert "success true" in result.stdout
+    for name in ("metrics.json", "timeseries.parquet", "summary.txt", ".hydra/config.yaml"):
+        assert (run_dir / name).is_file(), name
+    for stem in ("tcp_tracking", "tracking_error", "contact_force", "joint_torques"):
+        for suffix in (".png", ".pdf"):
+            assert (run_dir / "figures" / f"{stem}{suffix}").stat().st_size > 1000
+    metrics = json.loads((run_dir / "metrics.json").read_text())
+    assert metrics["success"] is True and metrics["controller"] == "impedance"
+    ts = pd.read_parquet(run_dir / "timeseries.parquet")
+    assert len(ts) == 18000 and np.isfinite(ts.drop(columns=["torque_saturated"]).to_numpy(float)).all()
+    assert not list(run_dir.glob(".*.tmp")) and not list(run_dir.glob("*.tmp"))
+
+
+def test_diverging_run_fails_cleanly(tmp_path):
+    record = execute(
+        make_cfg(
+            "robot.max_torque=[1e9,1e9,1e9,1e9,1e9,1e9,1e9]",
+            "controller.k=1e9",
+            "controller.m=0.001",
+            "task.progress=false",
+        ),
+        tmp_path,
+        echo=False,
+    )
+    assert record["status"] == "failed" and record["success"] is False
+    assert "diverged" in record["error"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["metrics.json", "summary.txt"]
+    saved = json.loads((tmp_path / "metrics.json").read_text())
+    assert saved["peak_axial_force_N"] is None and saved["status"] == "failed"
+
+
+@pytest.mark.parametrize(
+    "override, message",
+    [
+        ("controller=nope", "Available options in 'controller'"),
+        ("controller.kk=1", "controller.kk"),
+        ("controller.k=abc", "could not be converted to Float"),
+        ("physics.integrator=foo", "expected one of [euler, rk4, implicit, implicitfast]"),
+    ],
+)
+def test_bad_config_fails_at_composition(tmp_path, override, message):
+    result = run_cli(override, f"hydra.run.dir={tmp_path / 'run'}")
+    assert result.returncode == 1
+    assert message in result.stderr
+    assert not (tmp_path / "run").exists()  # nothing written
+
+
+@pytest.mark.parametrize(
+    "override, message",
+    [
+        ("tool.geometry.radius=-0.01", "radius"),
+        ("target.geometry.radial_clearance=-0.001", "radial_clearance"),
+        ("task.stroke=[0,0,0]", "task.stroke"),
+        ("robot.max_torque=[1,1]", "robot.max_torque has 2 values"),
+        ("target.pos=[3.0,0.0,0.2]", "inverse kinematics did not reach the start pose"),
+    ],
+)
+def test_bad_values_fail_the_run_with_a_clear_error(tmp_path, override, message):
+    record = execute(make_cfg(override), tmp_path, echo=False)
+    assert record["status"] == "failed"
+    assert message in record["error"]
+    assert "\n" not in record["error"]
+
+
+def test_fragment_files_are_checked(tmp_path):
+    no_dock = tmp_path / "no_dock.xml"
+    no_dock.write_text(
+        '<mujoco><worldbody><body name="plug"><geom size="0.01"/>'
+        '<site name="sensor_site"/></body></worldbody></mujoco>'
+    )
+    no_sensor = tmp_path / "no_sensor.xml"
+    no_sensor.write_text(
+        '<mujoco><worldbody><body name="dock"><geom size="0.01"/></body></worldbody></mujoco>'
+    )
+    cases = [
+        (f"tool.mjcf={no_dock}", "no body named 'dock'"),
+        (f"tool.mjcf={no_sensor}", "no site named 'sensor_site'"),
+        (f"target.mjcf={no_dock}", "no body named 'dock'"),
+        (f"tool.mjcf={tmp_path / 'missing.xml'}", "no such file"),
+    ]
+    for override, message in cases:
+        record = execute(make_cfg(override), tmp_path / "run", echo=False)
+        assert record["status"] == "failed" and message in record["error"], record["error"]
+
+
+def test_a_fragment_file_tool_docks_like_the_generated_one(tmp_path):
+    """Write the parametric plug to a file and dock with it: the file path works end to end."""
+    from compliant_docking.config.geometry import PlugGeometry
+    from compliant_docking.sim.geometry import build_plug
+
+    path = tmp_path / "plug.xml"
+    path.write_text(build_plug(PlugGeometry()).to_xml())
+    record = execute(
+        make_cfg(f"tool.mjcf={path}", "task.progress=false"), tmp_path / "run", figures=False, echo=False
+    )
+    assert record["success"] is True, record["error"] or record["gate_failures"]

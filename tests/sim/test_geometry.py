@@ -1,0 +1,308 @@
+"""Physics checks of the parametric plug/socket (compliant_docking.sim.geometry)."""
+
+from __future__ import annotations
+
+import importlib.util
+import math
+import sys
+
+import mujoco
+import numpy as np
+import pytest
+
+from compliant_docking import REPO_ROOT as ROOT
+from compliant_docking.config.geometry import (
+    ContactParams,
+    PlugGeometry,
+    SocketGeometry,
+    check_fit,
+)
+from compliant_docking.sim.geometry import (
+    build_plug,
+    build_socket,
+    plug_hull_vertices,
+    plug_inertia,
+)
+
+
+def _load_benchmark():
+    """The rig lives in benchmarks/contact_geometry.py (a script, not a package)."""
+    path = ROOT / "benchmarks" / "contact_geometry.py"
+    spec = importlib.util.spec_from_file_location("contact_geometry", path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules.setdefault("contact_geometry", module)
+    spec.loader.exec_module(module)
+    return module
+
+
+bench = _load_benchmark()
+
+
+def _quat_rotate(quat, vec):
+    out = np.zeros(3)
+    mujoco.mju_rotVecQuat(out, np.asarray(vec, float), np.asarray(quat, float))
+    return out
+
+
+# --------------------------------------------------------------------------- frames
+def _arm_with_parts(plug_collision="cylinder_tip"):
+    """A one-link 'arm' with the plug on its attachment site and the socket on a frame."""
+    plug, socket = PlugGeometry(), SocketGeometry()
+    arm = mujoco.MjSpec()
+    link = arm.worldbody.add_body(name="link", pos=[0.1, 0.2, 0.5])
+    link.add_joint(name="j", type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0, 0, 1])
+    link.add_geom(name="link_geom", type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[0.2, 0, 0])
+    flange_quat = np.array([math.cos(0.3), math.sin(0.3), 0.0, 0.0])
+    site = link.add_site(name="attachment_site", pos=[0.0, 0.0, 0.05], quat=flange_quat.tolist())
+    site.attach_body(build_plug(plug, ContactParams(), collision=plug_collision).body("dock"), prefix="tool_")
+    target_pos = np.array([0.6, -0.1, 0.2])
+    target_quat = np.array([math.cos(0.2), 0.0, math.sin(0.2), 0.0])
+    arm.worldbody.add_frame(pos=target_pos.tolist(), quat=target_quat.tolist()).attach_body(
+        build_socket(socket, ContactParams()).body("dock"), prefix="target_"
+    )
+    model = arm.compile()
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    return plug, socket, model, data, flange_quat, target_pos, target_quat
+
+
+def test_fragments_have_one_dock_body_and_documented_sites():
+    plug, socket = PlugGeometry(), SocketGeometry()
+    for spec in (build_plug(plug, ContactParams()), build_socket(socket, ContactParams())):
+        roots = [b.name for b in spec.worldbody.bodies]
+        assert roots == ["dock"]
+        assert not spec.body("dock").joints
+    model = build_plug(plug, ContactParams()).compile()
+    np.testing.assert_allclose(model.site("sensor_site").pos, 0.0, atol=1e-12)
+    np.testing.assert_allclose(model.site("sensor_site").quat, [1, 0, 0, 0], atol=1e-12)
+    np.testing.assert_allclose(model.site("tcp").pos, [0, 0, plug.length], atol=1e-12)
+    model = build_socket(socket, ContactParams()).compile()
+    np.testing.assert_allclose(model.site("seat").pos, 0.0, atol=1e-12)
+    np.testing.assert_allclose(model.site("mouth").pos, [0, 0, 0.045], atol=1e-12)
+
+
+@pytest.mark.parametrize("plug_collision", ["cylinder_tip", "capsule_tip", "mesh"])
+def test_attach_places_sites_where_documented(plug_collision):
+    plug, socket, model, data, flange_quat, target_pos, target_quat = _arm_with_parts(plug_collision)
+    assert all(model.mesh(i).name.startswith("tool_") for i in range(model.nmesh))
+    flange = data.site_xpos[model.site("attachment_site").id]
+    np.testing.assert_allclose(data.site_xpos[model.site("tool_sensor_site").id], flange, atol=1e-12)
+    np.testing.assert_allclose(
+        data.site_xmat[model.site("tool_sensor_site").id],
+        data.site_xmat[model.site("attachment_site").id],
+        atol=1e-12,
+    )
+    link_quat = data.xquat[model.body("link").id]
+    world_flange_quat = np.zeros(4)
+    mujoco.mju_mulQuat(world_flange_quat, link_quat, flange_quat)
+    expected_tcp = flange + _quat_rotate(world_flange_quat, [0, 0, plug.length])
+    np.testing.assert_allclose(data.site_xpos[model.site("tool_tcp").id], expected_tcp, atol=1e-12)
+    np.testing.assert_allclose(data.site_xpos[model.site("target_seat").id], target_pos, atol=1e-12)
+    expected_mouth = target_pos + _quat_rotate(target_quat, [0, 0, socket.mouth_height])
+    np.testing.assert_allclose(data.site_xpos[model.site("target_mouth").id], expected_mouth, atol=1e-12)
+
+
+def test_plug_and_socket_ignore_default_collision_geoms():
+    """The arm's sphere (contype = conaffinity = 1) overlaps the plug: no contact."""
+    *_, model, data, _, _, _ = _arm_with_parts()
+    mujoco.mj_collision(model, data)
+    link_geom = model.geom("link_geom").id
+    touching = {(data.contact.geom1[i], data.contact.geom2[i]) for i in range(data.ncon)}
+    assert all(link_geom not in pair for pair in touching)
+    plug_geoms = [i for i in range(model.ngeom) if model.geom(i).name.startswith("tool_")]
+    dist = mujoco.mj_geomDistance(model, data, link_geom, plug_geoms[0], 1.0, None)
+    assert dist < 0.0, "the test needs the sphere to overlap the plug"
+
+
+# -------------------------------------------------------------------------- clearance
+@pytest.mark.parametrize("sectors", [12, 16])
+def test_bore_free_radius_never_below_nominal(sectors):
+    socket = SocketGeometry(sectors=sectors)
+    for z in (0.002, 0.015, 0.028):
+        lowest, highest = bench.measured_free_radius(socket, z)
+        assert lowest >= socket.bore_radius - 1e-9
+        assert lowest == pytest.approx(socket.bore_radius, abs=1e-7)
+        assert highest == pytest.approx(socket.bore_radius / math.cos(math.pi / sectors), abs=2e-6)
+
+
+@pytest.mark.parametrize("sectors", [12, 16])
+def test_plug_sized_cylinder_fits_with_nominal_clearance(sectors):
+    """A plug-radius cylinder offset by just under the clearance, in any direction, touches
+    no bore box; offset just past the clearance towards a face, it penetrates."""
+    socket = SocketGeometry(sectors=sectors)
+    spec = build_socket(socket, ContactParams())
+    probe_body = spec.worldbody.add_body(name="probe", mocap=True)
+    probe_body.add_geom(
+        name="probe",
+        type=mujoco.mjtGeom.mjGEOM_CYLINDER,
+        size=[socket.plug_radius, 0.012, 0],
+        pos=[0, 0, 0.015],
+    )
+    model = spec.compile()
+    data = mujoco.MjData(model)
+    probe = model.geom("probe").id
+    bores = [model.geom(f"bore_{k}").id for k in range(sectors)]
+
+    def min_distance(offset, azimuth):
+        data.mocap_pos[0] = [offset * math.cos(azimuth), offset * math.sin(azimuth), 0.0]
+        mujoco.mj_forward(model, data)
+        return min(mujoco.mj_geomDistance(model, data, probe, b, 0.01, None) for b in bores)
+
+    c = socket.radial_clearance
+    for azimuth in np.linspace(0.0, 2.0 * math.pi, 90, endpoint=False):
+        assert min_distance(c - 2e-6, azimuth) > 0.0
+    assert min_distance(c + 2e-5, 0.0) < 0.0  # towards the centre of face 0
+
+
+def test_funnel_radius_and_mouth_match_formula():
+    socket = SocketGeometry()
+    slope = math.tan(math.radians(socket.funnel_angle_deg))
+    assert socket.mouth_radius == pytest.approx(socket.bore_radius + socket.funnel_depth * slope)
+    heights = np.array([0.031, 0.038, 0.0445])
+    measured = [bench.measured_free_radius(socket, z) for z in heights]
+    lowest = np.array([lo for lo, _ in measured])
+    np.testing.assert_allclose(lowest, [socket.free_radius(z) for z in heights], atol=1e-7)
+    corner = np.array([hi for _, hi in measured])  # walls closed up to the polygon corners
+    np.testing.assert_allclose(corner, lowest / math.cos(math.pi / socket.sectors), atol=2e-6)
+    fit_slope, fit_intercept = np.polyfit(heights, lowest, 1)
+    assert fit_slope == pytest.approx(slope, rel=1e-5)
+    assert fit_slope * socket.mouth_height + fit_intercept == pytest.approx(socket.mouth_radius, abs=1e-7)
+
+
+def test_funnel_meets_bore_without_lip_or_gap():
+    """Just below and just above the bore/funnel circle the free radius is continuous
+    (no lip) and every ray hits a wall (no gap)."""
+    socket = SocketGeometry()
+    for dz in (-1e-5, 1e-5):
+        z = socket.insertion_depth + dz
+        lowest, _ = bench.measured_free_radius(socket, z)  # raises if a ray escapes
+        assert lowest == pytest.approx(socket.free_radius(z), abs=1e-8)
+        assert lowest >= socket.bore_radius - 1e-9
+
+
+def test_bore_is_closed_at_the_seat():
+    socket = SocketGeometry()
+    model = build_socket(socket, ContactParams()).compile()
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    geomid = np.zeros(1, dtype=np.int32)
+    start = np.array([0.003, -0.002, socket.mouth_height])
+    dist = mujoco.mj_ray(model, data, start, np.array([0.0, 0.0, -1.0]), None, 1, -1, geomid)
+    assert dist == pytest.approx(socket.mouth_height, abs=1e-9)
+    assert model.geom(geomid[0]).name == "floor"
+
+
+# --------------------------------------------------------------------------- insertion
+@pytest.mark.parametrize("offset, sectors", [(0.0, 16), (0.003, 16), (0.003, 12)])
+def test_plug_seats_in_rig(offset, sectors):
+    case = bench.Case("test", offset=offset)
+    result = bench.insert(PlugGeometry(), SocketGeometry(sectors=sectors), ContactParams(), case)
+    assert result.seated and not result.jammed
+    assert result.seat_time < 2.0
+    assert abs(result.final_tip_height) < 1e-4
+    assert -result.steady_contact_dist < 20e-6  # 5 N on the seat: a few micrometres
+
+
+def test_seated_penetration_stays_small_at_30_newton():
+    """Contact softness against the scale that matters, the 0.4 mm clearance: pressed with
+    30 N the plug sinks less than a fifth of it; striking the seat at the rig's 50 mm/s
+    (over twice the planners' fastest approach) less than 60 %. (The 5 ms time constant
+    gives ~53 µm and ~200 µm; the earlier 2 ms gave ~9 µm and ~75 µm but resolved impacts
+    within one step, see ContactParams.)"""
+    case = bench.Case("test", offset=0.003, push=30.0)
+    result = bench.insert(PlugGeometry(), SocketGeometry(), ContactParams(), case)
+    clearance = SocketGeometry().radial_clearance
+    assert result.seated
+    assert -result.steady_contact_dist < 0.2 * clearance
+    assert -result.min_contact_dist < 0.6 * clearance  # impact
+
+
+def test_oversized_plug_does_not_seat():
+    """Negative control for the rig: a plug wider than the bore must stop at the bore."""
+    plug = PlugGeometry(radius=0.0106)
+    result = bench.insert(plug, SocketGeometry(), ContactParams(), bench.Case("test"))
+    assert not result.seated
+    assert result.final_tip_height > 0.025
+
+
+def test_filtered_pairs_hide_no_contact():
+    """The default plug skips shaft-funnel, shaft-floor and chamfer-bore pairs.  Along a
+    tilted, offset insertion those pairs never overlap more than the deepest contact that
+    is modelled at the same instant (they only meet at the shared bore/funnel edge)."""
+    plug, socket = PlugGeometry(), SocketGeometry()
+    case = bench.Case("test", offset=0.003, tilt_deg=2.0)
+    rig = bench.build_rig(plug, socket, ContactParams(), case)
+    model = rig.model
+    shaft, tip = model.geom("tool_plug_shaft").id, model.geom("tool_plug_tip").id
+    bores = [model.geom(f"target_bore_{k}").id for k in range(socket.sectors)]
+    entry = [model.geom(f"target_funnel_{k}").id for k in range(socket.sectors)]
+    entry.append(model.geom("target_floor").id)
+    skipped = [(shaft, g) for g in entry] + [(tip, g) for g in bores]
+    worst = [-math.inf]
+
+    def monitor(m, d):
+        deepest = max(0.0, -float(d.contact.dist[: d.ncon].min())) if d.ncon else 0.0
+        for a, b in skipped:
+            overlap = -mujoco.mj_geomDistance(m, d, a, b, 1e-3, None)
+            worst[0] = max(worst[0], overlap - deepest)
+
+    result = bench.run_insertion(rig, case.push, monitor=monitor)
+    assert result.seated
+    assert worst[0] < 3e-6
+
+
+# -------------------------------------------------------------------------- validation
+@pytest.mark.parametrize(
+    "make, setting",
+    [
+        (lambda: SocketGeometry(radial_clearance=-0.0001), "radial_clearance"),
+        (lambda: SocketGeometry(radial_clearance=0.0), "radial_clearance"),
+        (lambda: SocketGeometry(funnel_angle_deg=0.0), "funnel_angle_deg"),
+        (lambda: SocketGeometry(funnel_angle_deg=85.0), "funnel_angle_deg"),
+        (lambda: SocketGeometry(sectors=6), "sectors"),
+        (lambda: SocketGeometry(insertion_depth=-0.01), "insertion_depth"),
+        (lambda: PlugGeometry(chamfer_length=0.02), "chamfer_length"),
+        (lambda: PlugGeometry(chamfer_angle_deg=80.0), "chamfer_angle_deg"),
+        (lambda: PlugGeometry(radius=0.0), "radius"),
+        (lambda: PlugGeometry(tip_segments=4), "tip_segments"),
+        (lambda: ContactParams(solref=(-0.002, 1.0)), "solref"),
+        (lambda: ContactParams(condim=2), "condim"),
+        (lambda: check_fit(PlugGeometry(radius=0.011), SocketGeometry()), "PlugGeometry.radius"),
+        (lambda: check_fit(PlugGeometry(length=0.02), SocketGeometry()), "PlugGeometry.length"),
+        (lambda: build_plug(PlugGeometry(), ContactParams(), collision="sdf"), "collision"),
+    ],
+)
+def test_bad_parameters_raise_value_error_naming_the_setting(make, setting):
+    with pytest.raises(ValueError, match=setting):
+        make()
+
+
+def test_good_pair_passes_fit_check():
+    check_fit(PlugGeometry(), SocketGeometry())
+
+
+# ----------------------------------------------------------------------------- inertia
+def test_plug_inertia_is_what_mujoco_compiles():
+    plug = PlugGeometry()
+    model = build_plug(plug, ContactParams()).compile()
+    body = model.body("dock")
+    mass, com, inertia = plug_inertia(plug)
+    assert body.mass[0] == pytest.approx(mass, rel=1e-12)
+    np.testing.assert_allclose(body.ipos, com, atol=1e-15)
+    np.testing.assert_allclose(body.inertia, inertia, rtol=1e-12)
+    np.testing.assert_allclose(body.iquat, [1, 0, 0, 0], atol=1e-12)
+
+
+def test_plug_inertia_matches_mujoco_mesh_inertia():
+    """Independent check: MuJoCo's own inertia of a fine hull of the plug, same mass."""
+    plug = PlugGeometry(chamfer_length=0.008)  # a long chamfer makes the cone matter
+    spec = mujoco.MjSpec()
+    spec.add_mesh(name="hull", uservert=plug_hull_vertices(plug, 0.0, 256).ravel().tolist())
+    body = spec.worldbody.add_body(name="plug")
+    body.add_geom(type=mujoco.mjtGeom.mjGEOM_MESH, meshname="hull", mass=plug.mass)
+    model = spec.compile()
+    mass, com, inertia = plug_inertia(plug)
+    compiled = model.body("plug")
+    assert compiled.mass[0] == pytest.approx(mass, rel=1e-9)
+    np.testing.assert_allclose(compiled.ipos, com, atol=2e-6)
+    np.testing.assert_allclose(np.sort(compiled.inertia), np.sort(inertia), rtol=2e-3)

@@ -1,0 +1,130 @@
+"""Socket misalignment: the physics and the gate see the TRUE pose, the planner the believed one."""
+
+from __future__ import annotations
+
+import json
+
+import mujoco
+import numpy as np
+import pytest
+
+from compliant_docking.run.runner import execute
+from compliant_docking.sim.misalignment import (
+    RECORD_KEYS,
+    Misalignment,
+    draw,
+    record_for,
+)
+from compliant_docking.sim.scene import socket_pose
+from compliant_docking.sim.simulate import prepare
+from tests.helpers import make_cfg
+
+M = "task.misalignment"
+
+
+def test_default_is_no_misalignment():
+    cfg = make_cfg()
+    pose = socket_pose(cfg)
+    assert pose.misalignment == Misalignment() and pose.misalignment.is_zero
+    assert np.allclose(pose.true.homogeneous, pose.believed.homogeneous)
+    assert record_for(cfg)["misalignment_seed"] is None
+
+
+def test_offsets_are_expressed_in_the_believed_socket_frame():
+    # a socket rotated 90° about world z: its x axis is world y
+    quat = [np.cos(np.pi / 4), 0.0, 0.0, np.sin(np.pi / 4)]
+    cfg = make_cfg(
+        f"target.quat=[{','.join(map(str, quat))}]",
+        f"{M}.x=0.003",
+        f"{M}.y=-0.002",
+        f"{M}.yaw_deg=90",
+        f"{M}.tilt_deg=10",
+    )
+    pose = socket_pose(cfg)
+    believed = pose.believed
+    assert np.allclose(believed.translation, cfg.target.pos)
+    # lateral offset along the socket's x (world y) and y (world −x)
+    assert np.allclose(pose.true.translation - believed.translation, [0.002, 0.003, 0.0], atol=1e-12)
+    # the true axis: tilted 10° from the believed one; yaw 90° turns the tilt direction
+    # from the socket's −y to its +x, i.e. to world +y here
+    axis = pose.true.rotation[:, 2]
+    assert np.degrees(np.arccos(axis @ believed.rotation[:, 2])) == pytest.approx(10.0)
+    assert axis @ np.array([0.0, 1.0, 0.0]) == pytest.approx(np.sin(np.radians(10.0)))
+
+
+def test_physics_sees_the_true_pose_and_the_planner_the_believed_one():
+    cfg = make_cfg(f"{M}.x=0.004", f"{M}.y=0.001", f"{M}.yaw_deg=15", f"{M}.tilt_deg=3")
+    sim = prepare(cfg)
+    pose = sim.scene.socket
+    # MuJoCo: the socket body sits at the TRUE pose
+    data = mujoco.MjData(sim.scene.model)
+    mujoco.mj_kinematics(sim.scene.model, data)
+    body = sim.scene.model.body(f"{cfg.target.prefix}dock").id
+    assert np.allclose(data.xpos[body], pose.true.translation, atol=1e-9)
+    assert np.allclose(data.xmat[body].reshape(3, 3), pose.true.rotation, atol=1e-9)
+    assert not np.allclose(pose.true.translation, pose.believed.translation)
+    # the planner: start = believed seat − stroke; goal on the believed axis, at the
+    # believed seat (or the overshoot past it)
+    stroke = np.asarray(cfg.task.stroke, float)
+    seat, socket_axis = pose.believed.translation, pose.believed.rotation[:, 2]
+    assert np.allclose(sim.waypoints.start.translation, seat - stroke)
+    goal = sim.waypoints.goal.translation - seat
+    assert np.linalg.norm(goal - (goal @ socket_axis) * socket_axis) < 1e-9
+    assert np.linalg.norm(goal) <= cfg.task.insertion_overshoot + 1e-9
+    # the plug points along the believed socket axis, not the true (tilted) one
+    assert np.allclose(sim.waypoints.start.rotation[:, 2], -pose.believed.rotation[:, 2])
+
+
+def test_same_seed_same_draw_and_components_draw_independently():
+    ranges = {"x_range": [-0.01, 0.01], "yaw_deg_range": [-180.0, 180.0], "tilt_deg_range": [0.0, 3.0]}
+    a = draw({**ranges, "seed": 7})
+    assert a == draw({**ranges, "seed": 7})
+    assert a != draw({**ranges, "seed": 8})
+    assert -0.01 <= a.x <= 0.01 and 0.0 <= a.tilt_deg <= 3.0 and a.y == 0.0 and a.seed == 7
+    # the x draw does not depend on which other components are drawn
+    assert draw({"x_range": [-0.01, 0.01], "seed": 7}).x == a.x
+    # scaling the range scales the draw (common random numbers across a grid)
+    assert draw({"x_range": [-0.02, 0.02], "seed": 7}).x == pytest.approx(2 * a.x)
+    # and through the config: the same seed records the same values
+    overrides = (f"{M}.x_range=[-0.01,0.01]", f"{M}.tilt_deg_range=[0,3]", f"{M}.seed=7")
+    assert record_for(make_cfg(*overrides)) == record_for(make_cfg(*overrides))
+    assert record_for(make_cfg(*overrides))["misalignment_x_m"] == pytest.approx(a.x)
+    seeds = {draw({"x_range": [0.0, 1.0], "seed": s}).x for s in range(20)}
+    assert len(seeds) == 20 and min(seeds) < 0.25 and max(seeds) > 0.75
+
+
+@pytest.mark.parametrize(
+    "overrides, message",
+    [
+        ((f"{M}.x=0.001", f"{M}.x_range=[0,0.002]"), "task.misalignment.x = 0.001 and"),
+        ((f"{M}.y_range=[0.002,0.001]",), "low <= high"),
+        ((f"{M}.tilt_deg_range=[1]",), "task.misalignment.tilt_deg_range must be [low, high]"),
+        ((f"{M}.tilt_deg=75",), "task.misalignment.tilt_deg must be within"),
+        ((f"{M}.x_range=[0,0.002]", f"{M}.seed=-1"), "task.misalignment.seed"),
+    ],
+)
+def test_meaningless_settings_fail_the_run_naming_the_key(tmp_path, overrides, message):
+    record = execute(make_cfg(*overrides, "task.progress=false"), tmp_path, figures=False, echo=False)
+    assert record["status"] == "failed" and message in record["error"]
+    assert all(record[k] is None for k in RECORD_KEYS)
+
+
+def test_unknown_misalignment_keys_are_rejected_at_composition():
+    with pytest.raises(Exception, match="task.misalignment.lateral"):
+        make_cfg(f"{M}.lateral=0.001")
+
+
+def test_a_misalignment_needs_a_socket():
+    with pytest.raises(ValueError, match="needs a socket"):
+        socket_pose(make_cfg("target=none", f"{M}.x=0.001"))
+
+
+def test_large_misalignment_fails_the_gate_and_says_why(tmp_path):
+    """20 mm off: beyond the funnel's mouth (≈ 8.7 mm of capture), the plug lands beside it."""
+    record = execute(make_cfg(f"{M}.x=0.02", "task.progress=false"), tmp_path, figures=False, echo=False)
+    assert record["status"] == "ok" and record["success"] is False
+    assert "seat lateral error" in record["gate_failures"]
+    assert record["seat_lateral_error_m"] > 0.015  # measured against the TRUE socket
+    saved = json.loads((tmp_path / "metrics.json").read_text())
+    assert saved["misalignment_x_m"] == 0.02 and saved["misalignment_lateral_m"] == 0.02
+    assert saved["misalignment_yaw_deg"] == 0.0 and saved["misalignment_seed"] is None

@@ -1,0 +1,168 @@
+"""Sweeps end to end (joblib, 2 workers): failure isolation, summary, exit status, crashes."""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+
+import pandas as pd
+import pytest
+from hydra import compose, initialize_config_dir
+from hydra.core.global_hydra import GlobalHydra
+from hydra.core.override_parser.overrides_parser import OverridesParser
+from omegaconf import OmegaConf
+
+from compliant_docking import CONF_DIR
+from compliant_docking.config import register_schemas
+from compliant_docking.sweep.callback import expected_jobs
+from compliant_docking.sweep.progress import job_line
+from compliant_docking.sweep.summary import ORPHAN_ERROR, SweepOutcome
+from tests.helpers import SHORT_SWEEP as SHORT
+from tests.helpers import TESTS, sweep_cli
+
+
+def test_a_failing_job_is_recorded_and_the_sweep_goes_on(tmp_path):
+    sweep = tmp_path / "sweep"
+    result = sweep_cli(sweep, *SHORT, "task.stroke=[0,0,-0.1],[0,0,0],[0,0,-0.09]")
+    out = result.stdout
+    assert result.returncode == 1, result.stderr[-3000:]  # a job failed
+
+    jobs = sorted(p for p in sweep.iterdir() if p.is_dir() and p.name[0].isdigit())
+    assert [p.name.split("_", 1)[0] for p in jobs] == ["0", "1", "2"]
+    assert all("task.stroke=" in p.name for p in jobs)  # a person can tell them apart
+    records = {p.name[0]: json.loads((p / "metrics.json").read_text()) for p in jobs}
+    assert records["1"]["status"] == "failed" and "task.stroke" in records["1"]["error"]
+    assert records["0"]["status"] == records["2"]["status"] == "ok"
+    assert (jobs[0] / "timeseries.parquet").is_file() and (jobs[2] / "figures").is_dir()
+
+    summary = pd.read_parquet(sweep / "summary.parquet")
+    assert len(summary) == 3 and len(pd.read_csv(sweep / "summary.csv")) == 3
+    assert list(summary["status"]) == ["ok", "failed", "ok"]
+    assert summary["task.stroke"].tolist() == ["[0,0,-0.1]", "[0,0,0]", "[0,0,-0.09]"]
+    md = (sweep / "summary.md").read_text()
+    assert "3 jobs: 2 succeeded, 1 failed" in md and "peak axial force [N]" in md
+    for stem in ("table10_bars", "force_overlay"):
+        assert (sweep / "comparison" / f"{stem}.png").is_file()
+
+    # console: a line per finished job with a running count, then the counts
+    lines = [line for line in out.splitlines() if re.match(r"\[\d/3\] ", line)]
+    assert sorted(line[:5] for line in lines) == ["[1/3]", "[2/3]", "[3/3]"]
+    assert any(
+        line.split()[1].startswith("1_") and "task.stroke=[0,0,0]" in line and "FAILED" in line
+        for line in lines
+    )
+    assert any(" · ok · " in line and " N · " in line for line in lines)
+    assert "sweep: 3 jobs on 2 worker processes" in out
+    assert re.search(r"sweep finished in [\d.]+ s: 3 jobs: 2 succeeded, 1 failed, \d docked", out)
+    assert re.search(r"FAILED 1_\S*task.stroke=\[0,0,0\]\S*: task.stroke must be", out)
+
+
+def test_a_worker_crash_aborts_the_sweep_but_leaves_a_record(tmp_path):
+    """A segfault kills its worker: joblib stops the pool (the sibling job dies too), Hydra
+    aborts without on_multirun_end; main() still writes the summary and exits 1."""
+    sweep = tmp_path / "sweep"
+    result = sweep_cli(
+        sweep,
+        *SHORT,
+        "task.stroke=[0,0,-0.1],[0,0,-0.09],[0,0,-0.08]",
+        "+hydra.callbacks.crash._target_=sweep_crash_helper.SegfaultJob",
+        pythonpath=TESTS,
+    )
+    assert result.returncode == 1
+    assert "TerminatedWorkerError" in result.stderr
+    assert re.search(r"sweep ABORTED in [\d.]+ s", result.stdout)
+    jobs = [p for p in sweep.iterdir() if p.is_dir() and p.name[0].isdigit()]
+    assert any(p.name.startswith("1_") for p in jobs)
+    for job in jobs:  # every job directory ends with a metrics.json
+        record = json.loads((job / "metrics.json").read_text())
+        if job.name.startswith("1_"):
+            assert record["status"] == "failed" and record["error"] == ORPHAN_ERROR
+            assert record["controller"] == "impedance"
+    summary = pd.read_csv(sweep / "summary.csv")
+    assert len(summary) == len(jobs) and (summary["status"] == "failed").any()
+    assert "(aborted)" in (sweep / "summary.md").read_text()
+
+
+def _compose_multirun(*overrides: str):
+    register_schemas()
+    GlobalHydra.instance().clear()
+    with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
+        return compose("config", overrides=list(overrides), return_hydra_config=True)
+
+
+def test_sweeps_run_on_joblib_with_one_worker_per_core_and_the_summary_callback():
+    cfg = _compose_multirun()
+    assert cfg.hydra.launcher._target_.endswith("JoblibLauncher")
+    assert cfg.hydra.launcher.n_jobs == -1
+    assert cfg.hydra.callbacks.sweep._target_ == "compliant_docking.sweep.callback.SweepCallback"
+    assert cfg.hydra.sweep.dir.startswith("runs/multirun/")
+    assert "experiment" in cfg.hydra.job.config.override_dirname.exclude_keys
+
+
+@pytest.mark.parametrize(
+    "preset, jobs", [("controller_comparison", 18), ("misalignment", 40), ("clearance", 15)]
+)
+def test_presets_name_existing_options_and_compose(preset, jobs):
+    cfg = _compose_multirun(f"+experiment={preset}")
+    params = dict(cfg.hydra.sweeper.params)
+    assert expected_jobs(cfg) == jobs
+    assert f"_{preset}" in cfg.hydra.sweep.dir
+    parser = OverridesParser.create()
+    sweeps = {}
+    for key, value in params.items():
+        override = parser.parse_override(f"{key}={value}")
+        sweeps[key] = list(override.sweep_string_iterator())
+        if (CONF_DIR / key).is_dir():  # a config group: every option must exist
+            for option in sweeps[key]:
+                assert (CONF_DIR / key / f"{option}.yaml").is_file(), f"{key}={option}"
+    # the first and the last job compose (keys and values valid for the schemas)
+    for pick in (0, -1):
+        combo = [f"{k}={v[pick]}" for k, v in sweeps.items()]
+        job = _compose_multirun(f"+experiment={preset}", *combo)
+        OmegaConf.to_container(job, resolve=False)
+
+
+def test_expected_jobs_and_command_line_lists_replace_preset_lists():
+    def with_task_overrides(cfg, *overrides):  # as `-m overrides…` leaves them in the config
+        OmegaConf.update(cfg, "hydra.overrides.task", list(overrides), force_add=True)
+        return cfg
+
+    cfg = with_task_overrides(_compose_multirun(), "robot=iiwa14,fr3", "controller=impedance")
+    assert expected_jobs(cfg) == 2
+    cfg = _compose_multirun("+experiment=controller_comparison")
+    cfg = with_task_overrides(cfg, "+experiment=controller_comparison", "robot=fr3")
+    assert expected_jobs(cfg) == 9
+    cfg = with_task_overrides(cfg, "+experiment=controller_comparison", "robot=fr3", "controller=glob(*)")
+    assert expected_jobs(cfg) is None  # glob needs Hydra's config loader: count unknown
+
+
+def test_job_line_and_exit_status(tmp_path):
+    job = tmp_path / "sweep" / "3_controller=hqp"
+    job.mkdir(parents=True)
+    (job / "metrics.json").write_text(
+        json.dumps({"status": "ok", "success": True, "peak_axial_force_N": 12.34, "wall_time_s": 4.2})
+    )
+    line = job_line(job, tmp_path / "sweep", total=6)
+    assert line == "[1/6] 3_controller=hqp · ok · docked · peak 12.3 N · 4.2 s"
+    (job / "metrics.json").write_text(
+        json.dumps({"status": "failed", "success": False, "error": "diverged", "wall_time_s": 1.0})
+    )
+    assert job_line(job, tmp_path / "sweep", None) == "[1 done] 3_controller=hqp · FAILED · 1.0 s · diverged"
+    outcome = dict(sweep_dir=tmp_path, jobs=4, ok=4, docked=0, unfinished=0, summary={})
+    assert SweepOutcome(failed=0, aborted=False, **outcome).exit_status == 0  # not docked ≠ failed
+    assert SweepOutcome(failed=1, aborted=False, **outcome).exit_status == 1
+    assert SweepOutcome(failed=0, aborted=True, **outcome).exit_status == 1
+
+
+def test_jobs_finishing_together_get_distinct_progress_counts(tmp_path):
+    """Two workers can finish before either counts: each job's number is its rank among the
+    finished jobs (by write time, then name), not the number of files seen, so the lines
+    still read [1/3] and [2/3] instead of [2/3] twice."""
+    for i, name in enumerate(("0_a", "1_b")):
+        job = tmp_path / name
+        job.mkdir()
+        (job / "metrics.json").write_text(json.dumps({"status": "ok", "success": True}))
+        os.utime(job / "metrics.json", ns=(10**18 + i, 10**18 + i))
+    lines = [job_line(tmp_path / name, tmp_path.resolve(), 3) for name in ("1_b", "0_a")]
+    assert [line[:6] for line in lines] == ["[2/3] ", "[1/3] "]
