@@ -37,14 +37,13 @@ import numpy as np
 if __package__ in (None, ""):
     sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from compliant_docking.config.geometry import (  # noqa: E402
-    ContactParams,
-    PlugGeometry,
-    SocketGeometry,
-)
+from compliant_docking.config.geometry import ContactParams, PlugGeometry, SocketGeometry  # noqa: E402
+from compliant_docking.config.store import default_interface  # noqa: E402
 from compliant_docking.sim.geometry import build_plug, build_socket  # noqa: E402
 from compliant_docking.sim.geometry.collision import ALL_SOCKET_BITS  # noqa: E402
 
+#: the default interface of conf/ (tool=cone_plug, target=cone_socket)
+PLUG, SOCKET, CONTACT = default_interface()
 TIMESTEP = 0.001  # [s]
 SEAT_TOLERANCE = 0.0005  # tip within 0.5 mm (axially) of the seat counts as seated [m]
 START_GAP = 0.002  # the tip starts this far above the mouth [m]
@@ -292,7 +291,7 @@ def measured_free_radius(socket: SocketGeometry, z: float, rays: int = 960) -> t
     socket's geoms (MuJoCo's ray casting).  The minimum is the effective free radius;
     960 rays hit the polygon corners exactly for 12, 16, 20, 24, 30 or 32 sectors.
     """
-    model = build_socket(socket, ContactParams()).compile()
+    model = build_socket(socket, replace(CONTACT)).compile()
     data = mujoco.MjData(model)
     mujoco.mj_forward(model, data)
     geomid = np.zeros(1, dtype=np.int32)
@@ -317,11 +316,11 @@ CASES = (
 """Tilt is about world y; +2 deg leans the tip back towards the socket axis."""
 
 CONTACT_CANDIDATES = (
-    ("DEFAULT", ContactParams()),
-    ("stiffer solimp 0.99/0.999", ContactParams(solimp=(0.99, 0.999, 0.0005, 0.5, 2.0))),
-    ("dampratio 0.7", ContactParams(solref=(0.005, 0.7))),
-    ("timeconst 0.002", ContactParams(solref=(0.002, 1.0))),
-    ("MuJoCo defaults", ContactParams(solref=(0.02, 1.0), solimp=(0.9, 0.95, 0.001, 0.5, 2.0))),
+    ("DEFAULT", replace(CONTACT)),
+    ("stiffer solimp 0.99/0.999", replace(CONTACT, solimp=(0.99, 0.999, 0.0005, 0.5, 2.0))),
+    ("dampratio 0.7", replace(CONTACT, solref=(0.005, 0.7))),
+    ("timeconst 0.002", replace(CONTACT, solref=(0.002, 1.0))),
+    ("MuJoCo defaults", replace(CONTACT, solref=(0.02, 1.0), solimp=(0.9, 0.95, 0.001, 0.5, 2.0))),
 )
 
 
@@ -335,12 +334,12 @@ class Candidate:
 
 
 CANDIDATES = (
-    Candidate("DEFAULT 16+16 boxes / cylinder + chamfer mesh", SocketGeometry(), "cylinder_tip"),
-    Candidate("default, no pair filtering", SocketGeometry(), "cylinder_tip", filter_pairs=False),
-    Candidate("16+16 boxes / capsule + tip mesh", SocketGeometry(), "capsule_tip"),
-    Candidate("16+16 boxes / one convex mesh plug", SocketGeometry(), "mesh"),
-    Candidate("12+12 boxes / cylinder + chamfer mesh", SocketGeometry(sectors=12), "cylinder_tip"),
-    Candidate("default, midphase disabled", SocketGeometry(), "cylinder_tip", disable_midphase=True),
+    Candidate("DEFAULT 16+16 boxes / cylinder + chamfer mesh", replace(SOCKET), "cylinder_tip"),
+    Candidate("default, no pair filtering", replace(SOCKET), "cylinder_tip", filter_pairs=False),
+    Candidate("16+16 boxes / capsule + tip mesh", replace(SOCKET), "capsule_tip"),
+    Candidate("16+16 boxes / one convex mesh plug", replace(SOCKET), "mesh"),
+    Candidate("12+12 boxes / cylinder + chamfer mesh", replace(SOCKET, sectors=12), "cylinder_tip"),
+    Candidate("default, midphase disabled", replace(SOCKET), "cylinder_tip", disable_midphase=True),
 )
 
 
@@ -384,7 +383,7 @@ def _print_clearance_table(plug: PlugGeometry) -> None:
     )
     print("|---|---|---|---|---|")
     for sectors in (12, 16):
-        socket = SocketGeometry(sectors=sectors)
+        socket = replace(SOCKET, sectors=sectors)
         lo, hi = measured_free_radius(socket, 0.5 * socket.insertion_depth)
         chord = socket.bore_radius * math.cos(math.pi / sectors) - plug.radius
         print(
@@ -410,7 +409,7 @@ def _print_contact_table(plug: PlugGeometry, candidates, case: Case) -> None:
             forces = []
             r = insert(
                 plug,
-                SocketGeometry(),
+                replace(SOCKET),
                 contact,
                 replace(case, push=push),
                 monitor=lambda m, d: forces.append(axial_contact_force(m, d)),
@@ -427,7 +426,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="default geometry, two cases")
     args = parser.parse_args(argv)
-    plug, contact = PlugGeometry(), ContactParams()
+    plug, contact = replace(PLUG), replace(CONTACT)
     started = time.perf_counter()
     print(f"MuJoCo {mujoco.__version__}; {contact}; approach speed {Compliance().approach_speed} m/s\n")
     candidates = CANDIDATES[:1] if args.quick else CANDIDATES

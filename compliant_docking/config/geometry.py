@@ -12,6 +12,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from omegaconf import MISSING
+
 
 @dataclass
 class ContactParams:
@@ -37,11 +39,11 @@ class ContactParams:
               as an offset, which eats clearance; keep 0 unless you know why.
     """
 
-    friction: tuple[float, float, float] = (0.3, 0.005, 0.0001)
-    solref: tuple[float, float] = (0.005, 1.0)
-    solimp: tuple[float, float, float, float, float] = (0.95, 0.99, 0.0005, 0.5, 2.0)
-    condim: int = 3
-    margin: float = 0.0
+    friction: tuple[float, float, float] = MISSING
+    solref: tuple[float, float] = MISSING
+    solimp: tuple[float, float, float, float, float] = MISSING
+    condim: int = MISSING
+    margin: float = MISSING
 
     def __post_init__(self) -> None:
         for name in ("friction", "solref", "solimp"):  # accept lists (e.g. from YAML)
@@ -69,12 +71,12 @@ class PlugGeometry:
     tip_segments:      polygon sides of the convex tip mesh (vertices on the circle).
     """
 
-    radius: float = 0.010
-    length: float = 0.060
-    chamfer_angle_deg: float = 30.0
-    chamfer_length: float = 0.003
-    mass: float = 0.30
-    tip_segments: int = 32
+    radius: float = MISSING
+    length: float = MISSING
+    chamfer_angle_deg: float = MISSING
+    chamfer_length: float = MISSING
+    mass: float = MISSING
+    tip_segments: int = MISSING
 
     def __post_init__(self) -> None:
         _check_plug(self)
@@ -104,14 +106,14 @@ class SocketGeometry:
     floor_thickness:   thickness of the box closing the bottom of the bore [m].
     """
 
-    plug_radius: float = 0.010
-    radial_clearance: float = 0.0004
-    insertion_depth: float = 0.030
-    funnel_angle_deg: float = 30.0
-    funnel_depth: float = 0.015
-    sectors: int = 16
-    wall_thickness: float = 0.005
-    floor_thickness: float = 0.005
+    plug_radius: float = MISSING
+    radial_clearance: float = MISSING
+    insertion_depth: float = MISSING
+    funnel_angle_deg: float = MISSING
+    funnel_depth: float = MISSING
+    sectors: int = MISSING
+    wall_thickness: float = MISSING
+    floor_thickness: float = MISSING
 
     def __post_init__(self) -> None:
         _check_socket(self)

@@ -12,6 +12,7 @@ from hydra.core.config_store import ConfigStore
 from omegaconf import DictConfig
 
 from compliant_docking import CONF_DIR
+from compliant_docking.config.geometry import ContactParams, PlugGeometry, SocketGeometry
 from compliant_docking.config.schemas import (
     Config,
     HoldConfig,
@@ -75,3 +76,17 @@ def load_config(*overrides: str) -> DictConfig:
     GlobalHydra.instance().clear()
     with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
         return compose(config_name="config", overrides=list(overrides))
+
+
+def default_interface() -> tuple[PlugGeometry, SocketGeometry, ContactParams]:
+    """The default plug, socket and contact parameters, as conf/tool/cone_plug.yaml and
+    conf/target/cone_socket.yaml set them (their one home), for scripts and tests that
+    build the interface without a run: ``dataclasses.replace(socket, sectors=12)``."""
+    from omegaconf import OmegaConf
+
+    cfg = load_config()
+    return (
+        OmegaConf.to_object(cfg.tool.geometry),
+        OmegaConf.to_object(cfg.target.geometry),  # type: ignore[return-value]
+        OmegaConf.to_object(cfg.target.contact),
+    )

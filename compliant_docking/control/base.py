@@ -72,7 +72,7 @@ class TaskInertia:
     Steps using the fallback and the largest condition number seen are reported.
     """
 
-    def __init__(self, threshold: float = 1e8, check_every: int = 10):
+    def __init__(self, threshold: float, check_every: int = 10):
         if not threshold > 1.0:
             raise ValueError(f"condition_threshold must be > 1, got {threshold}")
         self.threshold = float(threshold)
@@ -126,8 +126,8 @@ class Controller(ABC):
         self,
         context: ControlContext,
         friction_comp: FrictionComp,
-        use_force_feedback: bool = True,
-        name: str = "",
+        use_force_feedback: bool,
+        name: str,
     ):
         self.ctx = context
         self.arm = context.arm

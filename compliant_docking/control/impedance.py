@@ -34,7 +34,7 @@ class ImpedanceController(Controller):
         d_rot: float,
         k_rot: float,
         null_damping: float,
-        condition_threshold: float = 1e8,
+        condition_threshold: float,
         **common,
     ):
         super().__init__(context, **common)

@@ -144,12 +144,12 @@ class SE3LieController(Controller):
     """
 
     def __init__(self, context: ControlContext, *,
-                 A_diag=(10.0, 10.0, 10.0, 1.0, 1.0, 1.0),
-                 D_diag=(80.0, 80.0, 80.0, 10.0, 10.0, 10.0),
-                 K_diag=(50.0, 50.0, 50.0, 25.0, 25.0, 25.0),
-                 null_damping: float = 10.0, condition_threshold: float = 1e8,
-                 desired_wrench=(0.0, 0.0, 0.0, 0.0, 0.0, 0.0),
-                 formulation: Formulation | str = Formulation.twist,
+                 A_diag,
+                 D_diag,
+                 K_diag,
+                 null_damping: float, condition_threshold: float,
+                 desired_wrench,
+                 formulation: Formulation | str,
                  A=None, D=None, K=None, **common):
         super().__init__(context, **common)
         self.A = _matrix(A_diag if A is None else A, "A_diag" if A is None else "A")

@@ -47,7 +47,7 @@ def compute_metrics(
     q_upper: np.ndarray,
     velocity_limits: np.ndarray,
     manipulability: np.ndarray | None,
-    steady_window: float = 2.0,
+    steady_window: float,
 ) -> DockingMetrics:
     """Table-10 metrics of a run's time series, keyed as in the registry (``DOCKING_KEYS``).
 

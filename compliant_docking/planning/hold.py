@@ -6,7 +6,7 @@ from compliant_docking.planning.base import Planner, Reference, Waypoints
 
 
 class HoldPlanner(Planner):
-    def __init__(self, waypoints: Waypoints, duration: float = 5.0, name: str = "hold"):
+    def __init__(self, waypoints: Waypoints, *, duration: float, name: str):
         if not duration > 0.0:
             raise ValueError(f"trajectory.duration must be > 0 s, got {duration}")
         self.duration = float(duration)

@@ -16,7 +16,7 @@ from compliant_docking.planning.base import (
 
 
 class QuinticPlanner(Planner):
-    def __init__(self, waypoints: Waypoints, duration: float = 15.0, name: str = "quintic"):
+    def __init__(self, waypoints: Waypoints, *, duration: float, name: str):
         if waypoints.goal is None:
             raise ValueError(
                 "trajectory=quintic needs a goal (a target); with target=none use trajectory=tracking"

@@ -316,16 +316,17 @@ class SE3ToppPlanner(Planner):
     def __init__(
         self,
         waypoints: Waypoints,
-        standoff: float = 0.10,
-        v_max_approach: float = 0.10,
-        a_max_approach: float = 0.20,
-        omega_max_approach: float = 0.20,
-        alpha_max_approach: float = 0.20,
-        v_max_docking: float = 0.02,
-        a_max_docking: float = 0.05,
-        omega_max_docking: float = 0.05,
-        alpha_max_docking: float = 0.05,
-        name: str = "se3topp",
+        *,
+        standoff: float,
+        v_max_approach: float,
+        a_max_approach: float,
+        omega_max_approach: float,
+        alpha_max_approach: float,
+        v_max_docking: float,
+        a_max_docking: float,
+        omega_max_docking: float,
+        alpha_max_docking: float,
+        name: str,
     ):
         self.limits = {
             "approach": Limits(

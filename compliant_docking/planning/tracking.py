@@ -45,16 +45,17 @@ class TrackingPlanner(Planner):
     def __init__(
         self,
         waypoints: Waypoints,
-        transition_duration: float = 1.5,
-        circle_duration: float = 5.0,
-        circle_radius: float = 0.10,
-        circle_frequency: float = 0.2,
-        circle_center_offset: float = -0.06,
-        figure8_duration: float = 5.0,
-        figure8_radius_x: float = 0.10,
-        figure8_radius_y: float = 0.07,
-        figure8_frequency: float = 0.2,
-        name: str = "tracking",
+        *,
+        transition_duration: float,
+        circle_duration: float,
+        circle_radius: float,
+        circle_frequency: float,
+        circle_center_offset: float,
+        figure8_duration: float,
+        figure8_radius_x: float,
+        figure8_radius_y: float,
+        figure8_frequency: float,
+        name: str,
     ):
         if waypoints.goal is not None:
             raise ValueError(

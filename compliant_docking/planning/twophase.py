@@ -106,12 +106,13 @@ class TwoPhasePlanner(Planner):
     def __init__(
         self,
         waypoints: Waypoints,
-        standoff: float = 0.10,
-        v_max_approach: float = 0.10,
-        a_max_approach: float = 0.20,
-        v_max_docking: float = 0.02,
-        a_max_docking: float = 0.05,
-        name: str = "twophase",
+        *,
+        standoff: float,
+        v_max_approach: float,
+        a_max_approach: float,
+        v_max_docking: float,
+        a_max_docking: float,
+        name: str,
     ):
         limits = {
             "approach": (float(v_max_approach), float(a_max_approach)),

@@ -71,8 +71,12 @@ def _fragment_error(kind: str, source: str, problem: str) -> ValueError:
     )
 
 
-def _load_fragment(kind: str, node: DictConfig) -> tuple[mujoco.MjSpec, str]:
-    """The fragment's spec: from ``node.mjcf`` if set, else generated from its geometry."""
+def _load_fragment(kind: str, node: DictConfig, contact: DictConfig | None) -> tuple[mujoco.MjSpec, str]:
+    """The fragment's spec: from ``node.mjcf`` if set, else generated from its geometry.
+
+    ``contact``: the contact parameters of the scene's plug/socket pair (the target's;
+    None in free space, where the plug's geoms keep MuJoCo's defaults).
+    """
     if node.mjcf:
         path = resolve_path(node.mjcf)
         if not path.is_file():
@@ -85,7 +89,8 @@ def _load_fragment(kind: str, node: DictConfig) -> tuple[mujoco.MjSpec, str]:
     else:
         geom = OmegaConf.to_object(node.geometry)
         if kind == "tool":
-            spec = build_plug(geom)  # type: ignore[arg-type]  # a PlugGeometry: its schema
+            params = None if contact is None else OmegaConf.to_object(contact)
+            spec = build_plug(geom, params)  # type: ignore[arg-type]  # a PlugGeometry: its schema
         else:
             spec = build_socket(geom, OmegaConf.to_object(node.contact))  # type: ignore[arg-type]
         source = f"{kind}={node.name} (parametric)"
@@ -218,9 +223,10 @@ def build_scene(cfg: DictConfig) -> Scene:
 
     # Tool: its mass properties first (from a standalone copy), then attach it posed
     # relative to the flange site: attach interprets the body pose in the site frame.
-    tool_spec, source = _load_fragment("tool", cfg.tool)
+    contact = cfg.target.get("contact")  # the pair's contact parameters; None in free space
+    tool_spec, source = _load_fragment("tool", cfg.tool, contact)
     tool = rigid_tool(tool_spec, source)
-    tool_spec, _ = _load_fragment("tool", cfg.tool)
+    tool_spec, _ = _load_fragment("tool", cfg.tool, contact)
     mount = mount_placement(cfg.tool.mount_pos, cfg.tool.mount_quat)
     tool_root = tool_spec.body("dock")
     tool_root.pos = mount.translation.tolist()
@@ -234,7 +240,7 @@ def build_scene(cfg: DictConfig) -> Scene:
     if socket is not None:
         if not cfg.tool.mjcf and not cfg.target.mjcf:
             check_fit(OmegaConf.to_object(cfg.tool.geometry), OmegaConf.to_object(cfg.target.geometry))  # type: ignore[arg-type]
-        target_spec, _ = _load_fragment("target", cfg.target)
+        target_spec, _ = _load_fragment("target", cfg.target, contact)
         quat = pin.Quaternion(socket.true.rotation).coeffs()[[3, 0, 1, 2]]
         frame = arm_spec.worldbody.add_frame(
             name="target_frame", pos=socket.true.translation.tolist(), quat=quat.tolist()

@@ -20,6 +20,7 @@ import pinocchio as pin
 import pytest
 from hydra.errors import ConfigCompositionException
 from hydra.utils import instantiate
+from omegaconf import OmegaConf
 
 from compliant_docking.config import FrictionComp
 from compliant_docking.control import lie
@@ -52,9 +53,13 @@ def random_spd(rng, scale):
 
 
 def controller(sim, **kwargs):
-    """A controller on sim's arm (friction feed-forward irrelevant: iiwa14 has none)."""
+    """A controller on sim's arm with the gains of conf/controller/se3_lie.yaml, some
+    overridden (friction feed-forward irrelevant: iiwa14 has none)."""
     assert not sim.controller.friction.active
-    return SE3LieController(sim.controller.ctx, friction_comp=FrictionComp.torque, **kwargs)
+    params = OmegaConf.to_container(sim.cfg.controller, resolve=True)
+    params.pop("_target_")
+    params["friction_comp"] = FrictionComp.torque
+    return SE3LieController(sim.controller.ctx, **{**params, **kwargs})
 
 
 def literal_law(arm, ref, wrench, A, D, K, b, F_d):

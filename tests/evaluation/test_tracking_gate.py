@@ -3,14 +3,15 @@ closed on NaN/inf, config thresholds, and the preset end to end on both robots."
 
 import json
 import math
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
+from omegaconf import OmegaConf
 
 from compliant_docking import CONF_DIR
-from compliant_docking.config.schemas import TrackingThresholds
 from compliant_docking.evaluation.tracking_gate import (
     FAIL,
     INCOMPLETE,
@@ -23,6 +24,9 @@ from compliant_docking.run.rundir import write_metrics
 from compliant_docking.run.runner import execute
 from compliant_docking.run.summary import format_summary
 from tests.helpers import make_cfg, run_cli
+
+#: the thresholds of conf/task (the seed's TrackingThresholds values)
+THRESHOLDS = OmegaConf.to_object(make_cfg().task.tracking_gate)
 
 SEGMENTS = [
     ("transition_1", 0.0, 1.5),
@@ -52,7 +56,7 @@ def window(ts, t0, t1):
 
 
 def judge(ts, thresholds=None, complete=True, segments=SEGMENTS):
-    return tracking_gate(ts, segments, thresholds or TrackingThresholds(), complete=complete)
+    return tracking_gate(ts, segments, thresholds or THRESHOLDS, complete=complete)
 
 
 def test_statistics_per_segment_and_overall():
@@ -162,7 +166,7 @@ def test_non_finite_values_fail_closed(column, value, where):
 
 
 def test_a_non_finite_threshold_fails_closed():
-    result = judge(frame(), TrackingThresholds(position_peak_m=float("nan")))
+    result = judge(frame(), replace(THRESHOLDS, position_peak_m=float("nan")))
     assert result.status == FAIL and "threshold position_peak_m" in result.failures[0]
 
 

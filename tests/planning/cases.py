@@ -1,11 +1,18 @@
 """Shared cases of the planner tests: docking and free-space waypoints, finite differences."""
 
+import functools
 import math
 
 import numpy as np
 import pinocchio as pin
+from omegaconf import OmegaConf
 
+from compliant_docking.config import load_config
 from compliant_docking.planning.base import Waypoints
+from compliant_docking.planning.quintic import QuinticPlanner
+from compliant_docking.planning.se3topp import SE3ToppPlanner
+from compliant_docking.planning.tracking import TrackingPlanner
+from compliant_docking.planning.twophase import TwoPhasePlanner
 
 AXIS = np.array([0.0, 0.0, -1.0])
 DOWN = np.diag([1.0, -1.0, -1.0])  # plug pointing down (z along −world z)
@@ -52,3 +59,25 @@ def coupled_case():
     rot_goal = DOWN @ pin.exp3(np.array([0.0, math.pi / 2, 0.0]))
     wp = docking(0.18, rot_goal=rot_goal, lateral=(0.3, 0.0))
     return wp, dict(a_max_approach=0.05, omega_max_approach=5.0, alpha_max_approach=5.0)
+
+
+@functools.cache
+def _yaml_params(option: str) -> dict:
+    node = load_config(f"trajectory={option}").trajectory
+    params = OmegaConf.to_container(node, resolve=True)
+    params.pop("_target_")
+    return params
+
+
+def _planner(cls, option: str):
+    def make(waypoints, **overrides):
+        """The planner with the parameters of conf/trajectory/<option>.yaml, some overridden."""
+        return cls(waypoints, **{**_yaml_params(option), **overrides})
+
+    return make
+
+
+quintic = _planner(QuinticPlanner, "quintic")
+twophase = _planner(TwoPhasePlanner, "twophase")
+se3topp = _planner(SE3ToppPlanner, "se3topp")
+tracking = _planner(TrackingPlanner, "tracking")

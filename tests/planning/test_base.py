@@ -7,21 +7,16 @@ import pytest
 from omegaconf import OmegaConf
 
 from compliant_docking.planning.base import Reference
-from compliant_docking.planning.se3topp import (
-    SE3ToppPlanner,
-)
-from compliant_docking.planning.tracking import TrackingPlanner
-from compliant_docking.planning.twophase import TwoPhasePlanner
 from tests.helpers import make_cfg
-from tests.planning.cases import docking, free_space, rotating_case
+from tests.planning.cases import docking, free_space, rotating_case, se3topp, tracking, twophase
 
 
 @pytest.mark.parametrize(
     "make",
     [
-        lambda: TwoPhasePlanner(docking(0.18)),
-        lambda: SE3ToppPlanner(rotating_case()),
-        lambda: TrackingPlanner(free_space()),
+        lambda: twophase(docking(0.18)),
+        lambda: se3topp(rotating_case()),
+        lambda: tracking(free_space()),
     ],
     ids=["twophase", "se3topp", "tracking"],
 )

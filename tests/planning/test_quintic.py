@@ -4,14 +4,14 @@ import numpy as np
 import pinocchio as pin
 
 from compliant_docking.planning.base import Reference, Waypoints, quintic_scaling
-from compliant_docking.planning.quintic import QuinticPlanner
+from tests.planning.cases import quintic
 
 
 def make(duration=15.0):
     start = pin.SE3(pin.rpy.rpyToMatrix(np.pi, 0.1, 0.2), np.array([0.5, 0.1, 0.3]))
     goal = pin.SE3(start.rotation, np.array([0.52, 0.05, 0.19]))
     return (
-        QuinticPlanner(Waypoints(start=start, goal=goal, axis=np.array([0, 0, -1.0])), duration=duration),
+        quintic(Waypoints(start=start, goal=goal, axis=np.array([0, 0, -1.0])), duration=duration),
         start,
         goal,
     )

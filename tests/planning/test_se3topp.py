@@ -17,15 +17,23 @@ from compliant_docking.control import lie
 from compliant_docking.planning.base import Reference, Waypoints
 from compliant_docking.planning.se3topp import (
     Limits,
-    SE3ToppPlanner,
     bang_bang,
     bang_bang_time,
     screw_timing,
     world_to_body,
 )
-from compliant_docking.planning.twophase import TwoPhasePlanner
 from tests.helpers import make_cfg
-from tests.planning.cases import AXIS, away_from, coupled_case, docking, fd_check, free_space, rotating_case
+from tests.planning.cases import (
+    AXIS,
+    away_from,
+    coupled_case,
+    docking,
+    fd_check,
+    free_space,
+    rotating_case,
+    se3topp,
+    twophase,
+)
 
 #: the issue's example: a screw of ‖ξ_v‖ = 0.33 m with ‖ξ_ω‖ = 1.5 rad about an axis
 #: perpendicular to it (centripetal term c = 0.495 m), a_max = 0.05 m/s², v_max = 0.10 m/s
@@ -172,7 +180,7 @@ def one_segment(xi, lim):
     goal = start * pin.exp6(np.asarray(xi, float))
     axis = np.array([0.0, 0.0, -1.0])
     standoff = abs(float((goal.translation - start.translation) @ axis)) + 1.0  # no approach
-    traj = SE3ToppPlanner(
+    traj = se3topp(
         Waypoints(start=start, goal=goal, axis=axis),
         standoff=standoff,
         v_max_docking=lim.v,
@@ -262,7 +270,7 @@ def test_pure_translation_is_the_classic_bang_bang_exactly(ahead, lateral):
     down = np.diag([1.0, -1.0, -1.0])
     goal = pin.SE3(down, np.array([0.55, 0.0, 0.20]))
     start = pin.SE3(down, goal.translation + np.array([*lateral, ahead]))
-    traj = SE3ToppPlanner(Waypoints(start=start, goal=goal, axis=np.array([0.0, 0.0, -1.0])))
+    traj = se3topp(Waypoints(start=start, goal=goal, axis=np.array([0.0, 0.0, -1.0])))
     lims = {"approach": (0.10, 0.20), "docking": (0.02, 0.05)}
     t = np.linspace(-0.5, traj.duration + 0.5, 5001)
     tab = traj.table(t)
@@ -287,7 +295,7 @@ def test_research_case_durations_are_unchanged():
     down = np.diag([1.0, -1.0, -1.0])
     goal = pin.SE3(down, np.array([0.55, 0.0, 0.20]))
     start = pin.SE3(down, goal.translation + np.array([0.0, 0.0, 0.18]))
-    traj = SE3ToppPlanner(Waypoints(start=start, goal=goal, axis=np.array([0.0, 0.0, -1.0])))
+    traj = se3topp(Waypoints(start=start, goal=goal, axis=np.array([0.0, 0.0, -1.0])))
     assert traj.segments == [
         ("approach", 0.0, 1.2999999999999996),
         ("docking", 1.2999999999999996, 6.700000000000002),
@@ -397,7 +405,7 @@ def test_bang_bang_time_triangle_and_trapezoid():
 
 def test_se3topp_reproduces_the_research_case_and_beats_twophase():
     wp = docking(0.18)
-    topp, two = SE3ToppPlanner(wp, standoff=0.10), TwoPhasePlanner(wp, standoff=0.10)
+    topp, two = se3topp(wp, standoff=0.10), twophase(wp, standoff=0.10)
     (_, _, t1), (_, _, t2) = topp.segments
     assert math.isclose(t1, 1.3, rel_tol=1e-9) and math.isclose(t2 - t1, 5.4, rel_tol=1e-9)
     assert [p["shape"] for p in topp.profiles()] == ["trapezoid", "trapezoid"]
@@ -405,7 +413,7 @@ def test_se3topp_reproduces_the_research_case_and_beats_twophase():
 
 
 def test_se3topp_triangle_when_the_segment_is_short():
-    traj = SE3ToppPlanner(docking(0.12), standoff=0.10)  # approach 0.02 m
+    traj = se3topp(docking(0.12), standoff=0.10)  # approach 0.02 m
     approach = traj.profiles()[0]
     # s-units: v_s = 0.1/0.02 = 5, a_s = 0.2/0.02 = 10, √10 ≤ 5: triangle of 2/√10 s
     assert approach["shape"] == "triangle"
@@ -423,7 +431,7 @@ def test_se3topp_limits_hold_along_the_whole_profile(case):
         lims["approach"] = (0.10, 0.05, 5.0, 5.0)
     else:
         wp, kwargs = (docking(0.18) if case == "translation" else rotating_case(math.radians(60))), {}
-    traj = SE3ToppPlanner(wp, standoff=0.10, **kwargs)
+    traj = se3topp(wp, standoff=0.10, **kwargs)
     if case == "coupled":
         xi = traj.profiles()[0]["xi"]
         assert np.linalg.norm(np.cross(xi[3:], xi[:3])) > 0.5  # a real centripetal term
@@ -463,7 +471,7 @@ def test_screw_timing_beats_every_fixed_acceleration_bang_bang():
 
 def test_se3topp_rest_to_rest_at_every_waypoint():
     wp = rotating_case()
-    traj = SE3ToppPlanner(wp, standoff=0.10)
+    traj = se3topp(wp, standoff=0.10)
     ref = Reference()
     pre_dock = wp.goal.translation - 0.10 * AXIS
     for t, pos, rot in (
@@ -481,7 +489,7 @@ def test_se3topp_rest_to_rest_at_every_waypoint():
 
 def test_se3topp_geodesic_midpoint():
     wp = rotating_case(math.pi / 2)
-    traj = SE3ToppPlanner(wp, standoff=0.10)
+    traj = se3topp(wp, standoff=0.10)
     name, t0, t1 = traj.segments[0]
     mid = traj.table(np.array([0.5 * (t0 + t1)]))
     rel = wp.start.rotation.T @ mid.rot[0]
@@ -498,7 +506,7 @@ def test_se3topp_geodesic_midpoint():
 
 def test_se3topp_screw_pose_matches_exp6():
     wp = rotating_case(1.0)
-    traj = SE3ToppPlanner(wp, standoff=0.10)
+    traj = se3topp(wp, standoff=0.10)
     sc = traj._screws[0]
     s = np.linspace(0.0, 1.0, 11)
     from compliant_docking.planning.se3topp import screw_pose
@@ -514,9 +522,9 @@ def test_se3topp_screw_pose_matches_exp6():
 def test_se3topp_world_twist_and_accel_are_derivatives(case):
     if case == "coupled":
         wp, kwargs = coupled_case()
-        traj = SE3ToppPlanner(wp, standoff=0.10, **kwargs)
+        traj = se3topp(wp, standoff=0.10, **kwargs)
     else:
-        traj = SE3ToppPlanner(docking(0.18) if case == "translation" else rotating_case(), standoff=0.10)
+        traj = se3topp(docking(0.18) if case == "translation" else rotating_case(), standoff=0.10)
     t = np.linspace(0.0, traj.duration, 4001)
     t = t[away_from(t, switch_times(traj), 1e-4)]
     e_v, e_w, e_a = fd_check(traj, t)
@@ -526,7 +534,7 @@ def test_se3topp_world_twist_and_accel_are_derivatives(case):
 def test_se3topp_body_twist_and_its_derivative():
     """World → body conversion V_b = [Rᵀẋ; Rᵀω], V̇_b = [Rᵀẍ − ω_b × v_b; Rᵀω̇] agrees with
     finite differences of the pose (log6(T(t−h)⁻¹T(t+h))/2h) and of V_b, and with ξ ṡ, ξ s̈."""
-    traj = SE3ToppPlanner(rotating_case(), standoff=0.10)
+    traj = se3topp(rotating_case(), standoff=0.10)
     t = np.linspace(0.0, traj.duration, 1501)
     t = t[away_from(t, switch_times(traj), 1e-4)]
     h = 1e-6
@@ -549,9 +557,9 @@ def test_se3topp_body_twist_and_its_derivative():
 
 def test_se3topp_rejects_bad_limits_and_free_space():
     with pytest.raises(ValueError, match="omega_max_docking"):
-        SE3ToppPlanner(docking(), omega_max_docking=0.0)
+        se3topp(docking(), omega_max_docking=0.0)
     with pytest.raises(ValueError, match="needs a goal"):
-        SE3ToppPlanner(free_space())
+        se3topp(free_space())
 
 
 # --------------------------------------------------------------------------- tracking

@@ -3,13 +3,12 @@
 import numpy as np
 import pytest
 
-from compliant_docking.planning.tracking import TrackingPlanner
-from tests.planning.cases import docking, fd_check, free_space
+from tests.planning.cases import docking, fd_check, free_space, tracking
 
 
 def test_tracking_segments_and_geometry():
     wp = free_space()
-    traj = TrackingPlanner(wp)
+    traj = tracking(wp)
     names = [s[0] for s in traj.segments]
     assert names == ["transition_1", "circle", "transition_2", "figure8"]
     bounds = [(s[1], s[2]) for s in traj.segments]
@@ -30,7 +29,7 @@ def test_tracking_segments_and_geometry():
 
 
 def test_tracking_is_c2_across_segment_joints():
-    traj = TrackingPlanner(free_space())
+    traj = tracking(free_space())
     eps = 1e-7
     for _, _, t_end in traj.segments:
         tab = traj.table(np.array([t_end - eps, t_end, t_end + eps]))
@@ -40,7 +39,7 @@ def test_tracking_is_c2_across_segment_joints():
 
 
 def test_tracking_twist_and_accel_are_derivatives():
-    traj = TrackingPlanner(free_space())
+    traj = tracking(free_space())
     t = np.linspace(0.0, 15.0, 6001)
     e_v, e_w, e_a = fd_check(traj, t)
     assert e_v < 1e-8 and e_w < 1e-9 and e_a < 1e-6
@@ -48,7 +47,7 @@ def test_tracking_twist_and_accel_are_derivatives():
 
 def test_tracking_refuses_a_target():
     with pytest.raises(ValueError, match="target=none"):
-        TrackingPlanner(docking())
+        tracking(docking())
 
 
 # --------------------------------------------------------------------------- all planners

@@ -7,12 +7,12 @@ import pinocchio as pin
 import pytest
 
 from compliant_docking.planning.base import Reference
-from compliant_docking.planning.twophase import TwoPhasePlanner, quintic_segment_time
-from tests.planning.cases import AXIS, DOWN, docking, fd_check, free_space
+from compliant_docking.planning.twophase import quintic_segment_time
+from tests.planning.cases import AXIS, DOWN, docking, fd_check, free_space, twophase
 
 
 def test_twophase_segment_times_follow_the_formula():
-    traj = TwoPhasePlanner(docking(0.18), standoff=0.10)
+    traj = twophase(docking(0.18), standoff=0.10)
     (n1, a0, a1), (n2, d0, d1) = traj.segments
     assert (n1, n2) == ("approach", "docking") and a0 == 0.0 and a1 == d0
     # approach 0.08 m at 0.10 m/s, 0.20 m/s²: max(1.5, √(5.7735·0.4)) = 1.5197 s (acceleration-bound)
@@ -27,7 +27,7 @@ def test_twophase_segment_times_follow_the_formula():
 
 @pytest.mark.parametrize("ahead", [0.18, 0.25])
 def test_twophase_respects_its_limits_and_one_is_active(ahead):
-    traj = TwoPhasePlanner(docking(ahead), standoff=0.10)
+    traj = twophase(docking(ahead), standoff=0.10)
     limits = {"approach": (0.10, 0.20), "docking": (0.02, 0.05)}
     for name, t0, t1 in traj.segments:
         t = np.linspace(t0, t1, 20001)[:-1]
@@ -41,7 +41,7 @@ def test_twophase_respects_its_limits_and_one_is_active(ahead):
 
 def test_twophase_passes_the_pre_dock_point_at_rest():
     wp = docking(0.18, lateral=(0.01, -0.02))
-    traj = TwoPhasePlanner(wp, standoff=0.10)
+    traj = twophase(wp, standoff=0.10)
     ref = Reference()
     _, _, t_pre = traj.segments[0]
     traj.sample(t_pre, ref)
@@ -52,7 +52,7 @@ def test_twophase_passes_the_pre_dock_point_at_rest():
 
 
 def test_twophase_without_approach_when_the_start_is_within_the_standoff():
-    traj = TwoPhasePlanner(docking(0.08), standoff=0.10)
+    traj = twophase(docking(0.08), standoff=0.10)
     assert [s[0] for s in traj.segments] == ["docking"]
     assert math.isclose(traj.duration, quintic_segment_time(0.08, 0.02, 0.05))
     assert traj.notes and "within the standoff" in traj.notes[0]
@@ -60,7 +60,7 @@ def test_twophase_without_approach_when_the_start_is_within_the_standoff():
 
 def test_twophase_fd_and_orientation_interpolation():
     rot_goal = DOWN @ pin.rpy.rpyToMatrix(0.2, -0.1, 0.3)
-    traj = TwoPhasePlanner(docking(0.18, rot_goal=rot_goal), standoff=0.10)
+    traj = twophase(docking(0.18, rot_goal=rot_goal), standoff=0.10)
     t = np.linspace(0.01, traj.duration - 0.01, 3001)
     e_v, e_w, e_a = fd_check(traj, t)
     assert e_v < 1e-8 and e_w < 1e-8 and e_a < 1e-7
@@ -70,7 +70,7 @@ def test_twophase_fd_and_orientation_interpolation():
 
 def test_twophase_needs_a_goal():
     with pytest.raises(ValueError, match="needs a goal"):
-        TwoPhasePlanner(free_space())
+        twophase(free_space())
 
 
 # --------------------------------------------------------------------------- se3topp

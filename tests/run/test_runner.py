@@ -137,11 +137,12 @@ def test_fragment_files_are_checked(tmp_path):
 
 def test_a_fragment_file_tool_docks_like_the_generated_one(tmp_path):
     """Write the parametric plug to a file and dock with it: the file path works end to end."""
-    from compliant_docking.config.geometry import PlugGeometry
+    from compliant_docking.config.store import default_interface
     from compliant_docking.sim.geometry import build_plug
 
+    plug, _, contact = default_interface()
     path = tmp_path / "plug.xml"
-    path.write_text(build_plug(PlugGeometry()).to_xml())
+    path.write_text(build_plug(plug, contact).to_xml())
     record = execute(
         make_cfg(f"tool.mjcf={path}", "task.progress=false"), tmp_path / "run", figures=False, echo=False
     )

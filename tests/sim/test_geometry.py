@@ -5,24 +5,24 @@ from __future__ import annotations
 import importlib.util
 import math
 import sys
+from dataclasses import replace
 
 import mujoco
 import numpy as np
 import pytest
 
 from compliant_docking import REPO_ROOT as ROOT
-from compliant_docking.config.geometry import (
-    ContactParams,
-    PlugGeometry,
-    SocketGeometry,
-    check_fit,
-)
+from compliant_docking.config.geometry import check_fit
+from compliant_docking.config.store import default_interface
 from compliant_docking.sim.geometry import (
     build_plug,
     build_socket,
     plug_hull_vertices,
     plug_inertia,
 )
+
+#: the default interface of conf/ (tool=cone_plug, target=cone_socket)
+PLUG, SOCKET, CONTACT = default_interface()
 
 
 def _load_benchmark():
@@ -47,18 +47,20 @@ def _quat_rotate(quat, vec):
 # --------------------------------------------------------------------------- frames
 def _arm_with_parts(plug_collision="cylinder_tip"):
     """A one-link 'arm' with the plug on its attachment site and the socket on a frame."""
-    plug, socket = PlugGeometry(), SocketGeometry()
+    plug, socket = replace(PLUG), replace(SOCKET)
     arm = mujoco.MjSpec()
     link = arm.worldbody.add_body(name="link", pos=[0.1, 0.2, 0.5])
     link.add_joint(name="j", type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0, 0, 1])
     link.add_geom(name="link_geom", type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[0.2, 0, 0])
     flange_quat = np.array([math.cos(0.3), math.sin(0.3), 0.0, 0.0])
     site = link.add_site(name="attachment_site", pos=[0.0, 0.0, 0.05], quat=flange_quat.tolist())
-    site.attach_body(build_plug(plug, ContactParams(), collision=plug_collision).body("dock"), prefix="tool_")
+    site.attach_body(
+        build_plug(plug, replace(CONTACT), collision=plug_collision).body("dock"), prefix="tool_"
+    )
     target_pos = np.array([0.6, -0.1, 0.2])
     target_quat = np.array([math.cos(0.2), 0.0, math.sin(0.2), 0.0])
     arm.worldbody.add_frame(pos=target_pos.tolist(), quat=target_quat.tolist()).attach_body(
-        build_socket(socket, ContactParams()).body("dock"), prefix="target_"
+        build_socket(socket, replace(CONTACT)).body("dock"), prefix="target_"
     )
     model = arm.compile()
     data = mujoco.MjData(model)
@@ -67,16 +69,16 @@ def _arm_with_parts(plug_collision="cylinder_tip"):
 
 
 def test_fragments_have_one_dock_body_and_documented_sites():
-    plug, socket = PlugGeometry(), SocketGeometry()
-    for spec in (build_plug(plug, ContactParams()), build_socket(socket, ContactParams())):
+    plug, socket = replace(PLUG), replace(SOCKET)
+    for spec in (build_plug(plug, replace(CONTACT)), build_socket(socket, replace(CONTACT))):
         roots = [b.name for b in spec.worldbody.bodies]
         assert roots == ["dock"]
         assert not spec.body("dock").joints
-    model = build_plug(plug, ContactParams()).compile()
+    model = build_plug(plug, replace(CONTACT)).compile()
     np.testing.assert_allclose(model.site("sensor_site").pos, 0.0, atol=1e-12)
     np.testing.assert_allclose(model.site("sensor_site").quat, [1, 0, 0, 0], atol=1e-12)
     np.testing.assert_allclose(model.site("tcp").pos, [0, 0, plug.length], atol=1e-12)
-    model = build_socket(socket, ContactParams()).compile()
+    model = build_socket(socket, replace(CONTACT)).compile()
     np.testing.assert_allclose(model.site("seat").pos, 0.0, atol=1e-12)
     np.testing.assert_allclose(model.site("mouth").pos, [0, 0, 0.045], atol=1e-12)
 
@@ -117,7 +119,7 @@ def test_plug_and_socket_ignore_default_collision_geoms():
 # -------------------------------------------------------------------------- clearance
 @pytest.mark.parametrize("sectors", [12, 16])
 def test_bore_free_radius_never_below_nominal(sectors):
-    socket = SocketGeometry(sectors=sectors)
+    socket = replace(SOCKET, sectors=sectors)
     for z in (0.002, 0.015, 0.028):
         lowest, highest = bench.measured_free_radius(socket, z)
         assert lowest >= socket.bore_radius - 1e-9
@@ -129,8 +131,8 @@ def test_bore_free_radius_never_below_nominal(sectors):
 def test_plug_sized_cylinder_fits_with_nominal_clearance(sectors):
     """A plug-radius cylinder offset by just under the clearance, in any direction, touches
     no bore box; offset just past the clearance towards a face, it penetrates."""
-    socket = SocketGeometry(sectors=sectors)
-    spec = build_socket(socket, ContactParams())
+    socket = replace(SOCKET, sectors=sectors)
+    spec = build_socket(socket, replace(CONTACT))
     probe_body = spec.worldbody.add_body(name="probe", mocap=True)
     probe_body.add_geom(
         name="probe",
@@ -155,7 +157,7 @@ def test_plug_sized_cylinder_fits_with_nominal_clearance(sectors):
 
 
 def test_funnel_radius_and_mouth_match_formula():
-    socket = SocketGeometry()
+    socket = replace(SOCKET)
     slope = math.tan(math.radians(socket.funnel_angle_deg))
     assert socket.mouth_radius == pytest.approx(socket.bore_radius + socket.funnel_depth * slope)
     heights = np.array([0.031, 0.038, 0.0445])
@@ -172,7 +174,7 @@ def test_funnel_radius_and_mouth_match_formula():
 def test_funnel_meets_bore_without_lip_or_gap():
     """Just below and just above the bore/funnel circle the free radius is continuous
     (no lip) and every ray hits a wall (no gap)."""
-    socket = SocketGeometry()
+    socket = replace(SOCKET)
     for dz in (-1e-5, 1e-5):
         z = socket.insertion_depth + dz
         lowest, _ = bench.measured_free_radius(socket, z)  # raises if a ray escapes
@@ -181,8 +183,8 @@ def test_funnel_meets_bore_without_lip_or_gap():
 
 
 def test_bore_is_closed_at_the_seat():
-    socket = SocketGeometry()
-    model = build_socket(socket, ContactParams()).compile()
+    socket = replace(SOCKET)
+    model = build_socket(socket, replace(CONTACT)).compile()
     data = mujoco.MjData(model)
     mujoco.mj_forward(model, data)
     geomid = np.zeros(1, dtype=np.int32)
@@ -196,7 +198,7 @@ def test_bore_is_closed_at_the_seat():
 @pytest.mark.parametrize("offset, sectors", [(0.0, 16), (0.003, 16), (0.003, 12)])
 def test_plug_seats_in_rig(offset, sectors):
     case = bench.Case("test", offset=offset)
-    result = bench.insert(PlugGeometry(), SocketGeometry(sectors=sectors), ContactParams(), case)
+    result = bench.insert(replace(PLUG), replace(SOCKET, sectors=sectors), replace(CONTACT), case)
     assert result.seated and not result.jammed
     assert result.seat_time < 2.0
     assert abs(result.final_tip_height) < 1e-4
@@ -210,8 +212,8 @@ def test_seated_penetration_stays_small_at_30_newton():
     gives ~53 µm and ~200 µm; the earlier 2 ms gave ~9 µm and ~75 µm but resolved impacts
     within one step, see ContactParams.)"""
     case = bench.Case("test", offset=0.003, push=30.0)
-    result = bench.insert(PlugGeometry(), SocketGeometry(), ContactParams(), case)
-    clearance = SocketGeometry().radial_clearance
+    result = bench.insert(replace(PLUG), replace(SOCKET), replace(CONTACT), case)
+    clearance = replace(SOCKET).radial_clearance
     assert result.seated
     assert -result.steady_contact_dist < 0.2 * clearance
     assert -result.min_contact_dist < 0.6 * clearance  # impact
@@ -219,8 +221,8 @@ def test_seated_penetration_stays_small_at_30_newton():
 
 def test_oversized_plug_does_not_seat():
     """Negative control for the rig: a plug wider than the bore must stop at the bore."""
-    plug = PlugGeometry(radius=0.0106)
-    result = bench.insert(plug, SocketGeometry(), ContactParams(), bench.Case("test"))
+    plug = replace(PLUG, radius=0.0106)
+    result = bench.insert(plug, replace(SOCKET), replace(CONTACT), bench.Case("test"))
     assert not result.seated
     assert result.final_tip_height > 0.025
 
@@ -229,9 +231,9 @@ def test_filtered_pairs_hide_no_contact():
     """The default plug skips shaft-funnel, shaft-floor and chamfer-bore pairs.  Along a
     tilted, offset insertion those pairs never overlap more than the deepest contact that
     is modelled at the same instant (they only meet at the shared bore/funnel edge)."""
-    plug, socket = PlugGeometry(), SocketGeometry()
+    plug, socket = replace(PLUG), replace(SOCKET)
     case = bench.Case("test", offset=0.003, tilt_deg=2.0)
-    rig = bench.build_rig(plug, socket, ContactParams(), case)
+    rig = bench.build_rig(plug, socket, replace(CONTACT), case)
     model = rig.model
     shaft, tip = model.geom("tool_plug_shaft").id, model.geom("tool_plug_tip").id
     bores = [model.geom(f"target_bore_{k}").id for k in range(socket.sectors)]
@@ -255,21 +257,21 @@ def test_filtered_pairs_hide_no_contact():
 @pytest.mark.parametrize(
     "make, setting",
     [
-        (lambda: SocketGeometry(radial_clearance=-0.0001), "radial_clearance"),
-        (lambda: SocketGeometry(radial_clearance=0.0), "radial_clearance"),
-        (lambda: SocketGeometry(funnel_angle_deg=0.0), "funnel_angle_deg"),
-        (lambda: SocketGeometry(funnel_angle_deg=85.0), "funnel_angle_deg"),
-        (lambda: SocketGeometry(sectors=6), "sectors"),
-        (lambda: SocketGeometry(insertion_depth=-0.01), "insertion_depth"),
-        (lambda: PlugGeometry(chamfer_length=0.02), "chamfer_length"),
-        (lambda: PlugGeometry(chamfer_angle_deg=80.0), "chamfer_angle_deg"),
-        (lambda: PlugGeometry(radius=0.0), "radius"),
-        (lambda: PlugGeometry(tip_segments=4), "tip_segments"),
-        (lambda: ContactParams(solref=(-0.002, 1.0)), "solref"),
-        (lambda: ContactParams(condim=2), "condim"),
-        (lambda: check_fit(PlugGeometry(radius=0.011), SocketGeometry()), "PlugGeometry.radius"),
-        (lambda: check_fit(PlugGeometry(length=0.02), SocketGeometry()), "PlugGeometry.length"),
-        (lambda: build_plug(PlugGeometry(), ContactParams(), collision="sdf"), "collision"),
+        (lambda: replace(SOCKET, radial_clearance=-0.0001), "radial_clearance"),
+        (lambda: replace(SOCKET, radial_clearance=0.0), "radial_clearance"),
+        (lambda: replace(SOCKET, funnel_angle_deg=0.0), "funnel_angle_deg"),
+        (lambda: replace(SOCKET, funnel_angle_deg=85.0), "funnel_angle_deg"),
+        (lambda: replace(SOCKET, sectors=6), "sectors"),
+        (lambda: replace(SOCKET, insertion_depth=-0.01), "insertion_depth"),
+        (lambda: replace(PLUG, chamfer_length=0.02), "chamfer_length"),
+        (lambda: replace(PLUG, chamfer_angle_deg=80.0), "chamfer_angle_deg"),
+        (lambda: replace(PLUG, radius=0.0), "radius"),
+        (lambda: replace(PLUG, tip_segments=4), "tip_segments"),
+        (lambda: replace(CONTACT, solref=(-0.002, 1.0)), "solref"),
+        (lambda: replace(CONTACT, condim=2), "condim"),
+        (lambda: check_fit(replace(PLUG, radius=0.011), replace(SOCKET)), "PlugGeometry.radius"),
+        (lambda: check_fit(replace(PLUG, length=0.02), replace(SOCKET)), "PlugGeometry.length"),
+        (lambda: build_plug(replace(PLUG), replace(CONTACT), collision="sdf"), "collision"),
     ],
 )
 def test_bad_parameters_raise_value_error_naming_the_setting(make, setting):
@@ -278,13 +280,13 @@ def test_bad_parameters_raise_value_error_naming_the_setting(make, setting):
 
 
 def test_good_pair_passes_fit_check():
-    check_fit(PlugGeometry(), SocketGeometry())
+    check_fit(replace(PLUG), replace(SOCKET))
 
 
 # ----------------------------------------------------------------------------- inertia
 def test_plug_inertia_is_what_mujoco_compiles():
-    plug = PlugGeometry()
-    model = build_plug(plug, ContactParams()).compile()
+    plug = replace(PLUG)
+    model = build_plug(plug, replace(CONTACT)).compile()
     body = model.body("dock")
     mass, com, inertia = plug_inertia(plug)
     assert body.mass[0] == pytest.approx(mass, rel=1e-12)
@@ -295,7 +297,7 @@ def test_plug_inertia_is_what_mujoco_compiles():
 
 def test_plug_inertia_matches_mujoco_mesh_inertia():
     """Independent check: MuJoCo's own inertia of a fine hull of the plug, same mass."""
-    plug = PlugGeometry(chamfer_length=0.008)  # a long chamfer makes the cone matter
+    plug = replace(PLUG, chamfer_length=0.008)  # a long chamfer makes the cone matter
     spec = mujoco.MjSpec()
     spec.add_mesh(name="hull", uservert=plug_hull_vertices(plug, 0.0, 256).ravel().tolist())
     body = spec.worldbody.add_body(name="plug")

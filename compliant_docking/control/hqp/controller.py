@@ -90,15 +90,15 @@ class HQPController(Controller):
         k_ji: float,
         dt_p: float,
         eps_abs: float,
-        force_source: ForceSource | str = ForceSource.sensor,
-        observer_kp: float = 20.0,
-        observer_ki: float = 40.0,
-        preload_force: float = 0.0,
-        preload_ramp_s: float = 1.5,
-        contact_deadband: float = 0.0,
-        condition_threshold: float = 1e8,
-        null_space_metric: NullSpaceMetric | str = NullSpaceMetric.euclidean,
-        solve_every_step: bool = False,
+        force_source: ForceSource | str,
+        observer_kp: float,
+        observer_ki: float,
+        preload_force: float,
+        preload_ramp_s: float,
+        contact_deadband: float,
+        condition_threshold: float,
+        null_space_metric: NullSpaceMetric | str,
+        solve_every_step: bool,
         **common,
     ):
         super().__init__(context, **common)
@@ -117,14 +117,14 @@ class HQPController(Controller):
             raise ValueError(f"controller.condition_threshold must be > 1, got {condition_threshold}")
         if omega_th < 0.0 or k_sa < 0.0 or k_ji < 0.0:
             raise ValueError("controller.omega_th, k_sa and k_ji must be ≥ 0")
-        self.K_min_ratio, self.k_alpha = float(K_min_ratio), float(k_alpha)
+        self.min_stiffness_ratio, self.sigmoid_gain = float(K_min_ratio), float(k_alpha)
         self.deadband = float(contact_deadband)
         self.sqrt_K0 = np.sqrt(self.K0)
         self._P = self.sqrt_K0[:, None] + self.sqrt_K0[None, :]  # D_r = √s·(Λ^½ ∘ P)
         self.threshold = float(condition_threshold)
-        self.omega_th, self.k_sa = float(omega_th), float(k_sa)
-        self.posture_K = float(k_ji) * vector_setting(K_ji, n, "K_ji", minimum=0.0)
-        self.posture_D = float(k_ji) * vector_setting(D_ji, n, "D_ji", minimum=0.0)
+        self.manipulability_threshold, self.singularity_weight = float(omega_th), float(k_sa)
+        self.posture_stiffness = float(k_ji) * vector_setting(K_ji, n, "K_ji", minimum=0.0)
+        self.posture_damping = float(k_ji) * vector_setting(D_ji, n, "D_ji", minimum=0.0)
         self.q_home = np.asarray(context.q_home, dtype=float).copy()
         self.axis = np.asarray(context.axis, dtype=float) / np.linalg.norm(context.axis)
         self.preload = PreloadRamp(preload_force, preload_ramp_s, context.dt)
@@ -235,7 +235,7 @@ class HQPController(Controller):
         # contact magnitude F, stiffness K_r = s·K0, preload p
         w_ext = wrench if self.observer is None else self.observer.update(state, wrench)
         F = max(math.sqrt(w_ext.dot(w_ext)) - self.deadband, 0.0) if self.use_force_feedback else 0.0
-        s = stiffness_scale(F, self.K_min_ratio, self.k_alpha)
+        s = stiffness_scale(F, self.min_stiffness_ratio, self.sigmoid_gain)
         preload = self.preload.update(F)
 
         # Λ⁻¹ = J M⁻¹ Jᵀ; Λ^½ and Λ from its eigendecomposition; D_r into its buffer
@@ -337,16 +337,20 @@ class HQPController(Controller):
         """a_null = k_sa q̈_sa + k_ji q̈_ji (Eq. 38-42)."""
         a_null = self._a_null
         np.subtract(self.q_home, q, out=a_null)
-        a_null *= self.posture_K
-        a_null -= self.posture_D * v
-        if w < self.omega_th and chol is not None and self.k_sa > 0.0:
+        a_null *= self.posture_stiffness
+        a_null -= self.posture_damping * v
+        if w < self.manipulability_threshold and chol is not None and self.singularity_weight > 0.0:
             self.singularity_steps += 1
             direction = manipulability_gradient(J, _dpotrs(chol, J)[0], 1.0)  # ∇w/w
             if self._inertia_metric:
                 direction = Minv.dot(direction)
             norm = math.sqrt(direction.dot(direction))
             if norm > 0.0:
-                a_null += (self.k_sa * (self.omega_th - w) / (self.omega_th * norm)) * direction
+                a_null += (
+                    self.singularity_weight
+                    * (self.manipulability_threshold - w)
+                    / (self.manipulability_threshold * norm)
+                ) * direction
         return a_null
 
     def _solve_levels(self, J, M, Minv, JMinv, lam, b, a_null, ok1: bool) -> np.ndarray:

@@ -45,13 +45,18 @@ PLUG_COLLISION_MODELS = ("cylinder_tip", "capsule_tip", "mesh")
 VISUAL_SEGMENTS = 64
 
 
-def apply_contact(geom: mujoco.MjsGeom, contact: ContactParams, contype: int, conaffinity: int) -> None:
-    """Write the contact parameters and the collision bits on a collision geom (no mass)."""
+def apply_contact(
+    geom: mujoco.MjsGeom, contact: ContactParams | None, contype: int, conaffinity: int
+) -> None:
+    """Write the contact parameters (None: leave MuJoCo's defaults) and the collision bits
+    on a collision geom, which adds no mass."""
     geom.contype = contype
     geom.conaffinity = conaffinity
+    geom.density = 0.0
+    if contact is None:
+        return
     geom.condim = contact.condim
     geom.friction = list(contact.friction)
     geom.solref = list(contact.solref)
     geom.solimp = list(contact.solimp)
     geom.margin = contact.margin
-    geom.density = 0.0

@@ -104,7 +104,7 @@ def _capsule_end(geom: PlugGeometry) -> float:
 
 
 def _add_plug_collision(
-    spec: mujoco.MjSpec, body: mujoco.MjsBody, geom: PlugGeometry, contact: ContactParams, collision: str
+    spec: mujoco.MjSpec, body: mujoco.MjsBody, geom: PlugGeometry, contact: ContactParams | None, collision: str
 ) -> None:
     """Add the collision geoms of the chosen model to ``body`` (plug frame)."""
 
@@ -141,7 +141,7 @@ def _add_plug_collision(
 
 
 def build_plug(
-    geom: PlugGeometry, contact: ContactParams | None = None, *, collision: str = "cylinder_tip"
+    geom: PlugGeometry, contact: ContactParams | None, *, collision: str = "cylinder_tip"
 ) -> mujoco.MjSpec:
     """Plug fragment: root body ``dock``, origin at the mounting face, +z towards the tip.
 
@@ -149,10 +149,9 @@ def build_plug(
     ``"cylinder_tip"`` (default), ``"capsule_tip"`` or ``"mesh"``.  A visual-only mesh
     of the whole plug is always added.  Sites ``sensor_site`` (origin, identity) and
     ``tcp`` (0, 0, length).  Explicit inertial from :func:`plug_inertia`.  ``contact``
-    (default: ``ContactParams()``) only matters against geoms of equal priority: the
-    socket's pieces have a higher priority, so against them the socket's values apply.
+    only matters against geoms of equal priority: the socket's pieces have a higher
+    priority, so against them the socket's values apply (None: MuJoCo's defaults).
     """
-    contact = ContactParams() if contact is None else contact
     require(collision in PLUG_COLLISION_MODELS, "collision", f"one of {PLUG_COLLISION_MODELS}", collision)
     if collision == "capsule_tip":
         require(
