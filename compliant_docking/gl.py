@@ -197,6 +197,11 @@ def configure(environ: MutableMapping[str, str] = os.environ) -> Decision:
     return decision
 
 
+def too_late() -> bool:
+    """Whether mujoco was imported before the backend could be chosen."""
+    return _too_late
+
+
 def decision() -> Decision:
     """The decision of this process (made now if :func:`configure` has not run)."""
     return _decision or configure()

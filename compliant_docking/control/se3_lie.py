@@ -395,6 +395,11 @@ class SE3LieController(Controller):
 
     # ------------------------------------------------------------------ inspection
     @property
+    def diagonal_gains(self) -> bool:
+        """Whether the step uses the element-wise path of diagonal A, D, K (the config's case)."""
+        return self._K_diag is not None and self._G_diag is not None
+
+    @property
     def Vdot_ref(self) -> np.ndarray:
         """V̇_ref of the last step (body axes) [m/s², rad/s²]."""
         return self._a + np.array(self._a_offset)

@@ -383,6 +383,11 @@ class SE3ToppPlanner(Planner):
         """``(name, t_start, t_end)`` of "approach" (if any) and "docking" [s]."""
         return list(self._segments)
 
+    @property
+    def screws(self) -> tuple:
+        """The constant-screw segments (start time, duration, start pose, ξ, timing)."""
+        return tuple(self._screws)
+
     def profiles(self) -> list[dict]:
         """Per segment: name, duration T [s], screw ξ, peak ṡ v_p [1/s], s̈ from rest a_s
         [1/s²], end of the acceleration t_ramp [s], shape ("triangle" or "trapezoid"),

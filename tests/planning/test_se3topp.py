@@ -507,7 +507,7 @@ def test_se3topp_geodesic_midpoint():
 def test_se3topp_screw_pose_matches_exp6():
     wp = rotating_case(1.0)
     traj = se3topp(wp, standoff=0.10)
-    sc = traj._screws[0]
+    sc = traj.screws[0]
     s = np.linspace(0.0, 1.0, 11)
     from compliant_docking.planning.se3topp import screw_pose
 
@@ -548,7 +548,7 @@ def test_se3topp_body_twist_and_its_derivative():
     assert np.abs(fd_twist - Vb).max() < 1e-8
     assert np.abs((Vb_hi - Vb_lo) / (2 * h) - dVb).max() < 1e-7
     # on a constant-screw segment V_b = ξ ṡ and V̇_b = ξ s̈
-    sc = traj._screws[0]
+    sc = traj.screws[0]
     k = t < sc.T
     _, ds, dds = sc.timing(t[k])
     assert np.allclose(Vb[k], np.outer(ds, sc.xi), atol=1e-12)

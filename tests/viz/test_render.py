@@ -211,7 +211,7 @@ def _import_in_subprocess(env: dict, code: str = "") -> dict:
     script = (
         code + "\nimport json, os, compliant_docking, compliant_docking.gl as g\n"
         "print(json.dumps({'MUJOCO_GL': os.environ.get('MUJOCO_GL'), "
-        "'source': g.decision().source, 'too_late': g._too_late}))"
+        "'source': g.decision().source, 'too_late': g.too_late()}))"
     )
     out = subprocess.run(
         [sys.executable, "-c", script],

@@ -104,7 +104,11 @@ def _capsule_end(geom: PlugGeometry) -> float:
 
 
 def _add_plug_collision(
-    spec: mujoco.MjSpec, body: mujoco.MjsBody, geom: PlugGeometry, contact: ContactParams | None, collision: str
+    spec: mujoco.MjSpec,
+    body: mujoco.MjsBody,
+    geom: PlugGeometry,
+    contact: ContactParams | None,
+    collision: str,
 ) -> None:
     """Add the collision geoms of the chosen model to ``body`` (plug frame)."""
 
