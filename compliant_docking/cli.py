@@ -1,4 +1,5 @@
-"""The command line: ``python -m compliant_docking [overrides]`` — one run, or a sweep with ``-m``.
+"""The command line: ``compliant-docking [overrides]`` (the console script of
+``[project.scripts]``, or ``python -m compliant_docking``) — one run, or a sweep with ``-m``.
 
 Exit status: 0 the run succeeded (docked / tracking gate PASS), 1 the run failed
 (error or divergence), 3 the run finished but its gate did not pass.
@@ -83,7 +84,11 @@ class CommandLine:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """``python -m compliant_docking``; the exit status."""
+    """``compliant-docking`` and ``python -m compliant_docking``; the exit status.
+
+    Hydra's shell completion (``-sc install=bash``) registers the completion for the
+    program's file name, so it works with the console script, not with ``python -m``.
+    """
     return CommandLine().run(sys.argv[1:] if argv is None else list(argv))
 
 
@@ -104,6 +109,7 @@ GROUPS = {
     "task": "start pose, run length, success criteria",
     "render": "video of the run: render=video writes docking.mp4",
     "experiment": "presets, added with +experiment=NAME",
+    "tracking": "experiment tracking, added with +tracking=mlflow",
     "robot_controller": "per-robot gains, applied automatically as ${robot}_${controller}",
 }
 #: groups that are not for composing by hand
@@ -112,21 +118,24 @@ HIDDEN = ("hydra", "schema")
 USAGE = """\
 compliant-docking: simulate a robot arm docking a plug into a socket under compliant control.
 
-Usage:
-  python -m compliant_docking [group=option ...] [key=value ...]      one run into runs/
-  python -m compliant_docking -m group=a,b [key=v1,v2 ...]            a sweep into runs/multirun/
+Usage (`compliant-docking` is the same command as `python -m compliant_docking`):
+  compliant-docking [group=option ...] [key=value ...]      one run into runs/
+  compliant-docking -m group=a,b [key=v1,v2 ...]            a sweep into runs/multirun/
 
 Examples:
-  python -m compliant_docking controller=hqp robot=fr3
-  python -m compliant_docking physics=earth controller.k=100
-  python -m compliant_docking -m controller=impedance,hqp,se3_lie robot=iiwa14,fr3
-  python -m compliant_docking -m +experiment=controller_comparison    (presets: conf/experiment)
-  python -m compliant_docking -m <same overrides> resume=last          (finish an interrupted sweep)
-  python -m compliant_docking -m <overrides> hydra/launcher=submitit_slurm hydra.launcher.partition=P
+  compliant-docking controller=hqp robot=fr3
+  compliant-docking physics=earth controller.k=100
+  compliant-docking -m controller=impedance,hqp,se3_lie robot=iiwa14,fr3
+  compliant-docking -m +experiment=controller_comparison    (presets: conf/experiment)
+  compliant-docking -m <same overrides> resume=last          (finish an interrupted sweep)
+  compliant-docking -m <overrides> hydra/launcher=submitit_slurm hydra.launcher.partition=P
+  compliant-docking -m +experiment=tune                      (tune gains with Optuna: docs/tuning.md)
+  compliant-docking +tracking=mlflow ...                     (log to MLflow: docs/tracking.md)
   python -m compliant_docking.report runs/multirun/<date>/<time>      (tables and figures again)
 
 Exit status: 0 success, 1 the run failed (error, divergence), 3 the run's gate did not pass.
-Hydra's own options: --hydra-help, --cfg job (print the composed config), --info.
+Hydra's own options: --hydra-help, --cfg job (print the composed config), --info,
+-sc install=bash (shell completion: eval "$(compliant-docking -sc install=bash)").
 """
 
 
