@@ -8,7 +8,7 @@ VENV   ?= .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: run test test-slow test-all lint benchmark setup gl clean
+.PHONY: run test test-slow test-all lint benchmark setup gl clean notebook
 
 setup: $(STAMP)
 
@@ -54,6 +54,18 @@ gl: $(STAMP)
 	  else \
 	    echo "note: videos (render=video) need headless OpenGL: install EGL (libEGL and Mesa) or OSMesa with your package manager"; \
 	  fi; }
+
+# JupyterLab (the `notebook` extra, installed once into .venv), opened on the comparison
+# notebook; the kernel is .venv's Python. ARGS go to jupyter lab (e.g. --no-browser).
+# As root (containers, this VM) jupyter refuses to start without --allow-root.
+NOTEBOOK_STAMP := $(VENV)/.notebook
+
+$(NOTEBOOK_STAMP): $(STAMP)
+	$(PY) -m pip install --quiet -e '.[notebook]'
+	touch $(NOTEBOOK_STAMP)
+
+notebook: $(NOTEBOOK_STAMP)
+	$(VENV)/bin/jupyter lab analysis/compare_runs.ipynb $$([ "$$(id -u)" = 0 ] && echo --allow-root) $(ARGS)
 
 benchmark: $(STAMP)
 	$(PY) benchmarks/loop_speed.py $(ARGS)

@@ -1,7 +1,7 @@
 """Runs → pandas tables, comparisons and figures (the orchestration side; no MuJoCo).
 
 - :mod:`.load`: :func:`load_runs` (one row per job directory), :func:`scan`,
-  :func:`newest_sweep`;
+  :func:`newest_sweep`, :func:`locate_runs`;
 - :mod:`.tables`: the comparison table, counts, ``summary.md`` and the summary files;
 - :mod:`.figures`: comparison figures across runs;
 - :mod:`.report`: ``python -m compliant_docking.report PATH``.
@@ -12,8 +12,10 @@ from compliant_docking.results.load import (
     GROUPS,
     RunSkippedWarning,
     load_runs,
+    locate_runs,
     newest_sweep,
     scan,
+    sweep_started,
 )
 from compliant_docking.results.tables import (
     Counts,
@@ -39,8 +41,10 @@ __all__ = [
     "counts",
     "jobs_markdown",
     "load_runs",
+    "locate_runs",
     "newest_sweep",
     "scan",
+    "sweep_started",
     "summary_markdown",
     "write_summary",
 ]

@@ -14,8 +14,10 @@ Light on purpose (pandas, PyYAML, Hydra's override parser): no MuJoCo, no Pinocc
 from __future__ import annotations
 
 import os
+import re
 import warnings
 from collections.abc import Iterable
+from datetime import datetime
 from pathlib import Path
 
 import pandas as pd
@@ -110,10 +112,55 @@ def scan(path: str | os.PathLike) -> tuple[pd.DataFrame, list[Path]]:
         return load_runs(path), skipped
 
 
+#: a sweep directory named by Hydra's default: runs/multirun/<date>/<time>[_<preset>]
+_DATE = re.compile(r"\d{4}-\d{2}-\d{2}")
+_TIME = re.compile(r"(\d{2})-(\d{2})-(\d{2})(?:_|$)")
+
+
+def sweep_started(sweep_dir: str | os.PathLike) -> datetime:
+    """When a sweep started: the date and time in its name (``<date>/<time>[_<preset>]``,
+    ``conf/config.yaml``); for a directory named otherwise, the modification time of its
+    ``multirun.yaml`` (Hydra writes it when the sweep starts), else of the directory.
+
+    Never the directory's own modification time when the name has one: writing a report
+    into an old sweep must not make it new.
+    """
+    path = Path(sweep_dir)
+    match = _TIME.match(path.name)
+    if match and _DATE.fullmatch(path.parent.name):
+        try:
+            return datetime.strptime(f"{path.parent.name} {':'.join(match.groups())}", "%Y-%m-%d %H:%M:%S")
+        except ValueError:  # e.g. 2025-13-01: not a date after all
+            pass
+    stamp = path / MULTIRUN_FILE if (path / MULTIRUN_FILE).exists() else path
+    return datetime.fromtimestamp(stamp.stat().st_mtime)
+
+
 def newest_sweep(root: str | os.PathLike = "runs/multirun") -> Path | None:
-    """The most recently modified sweep directory (one holding multirun.yaml) under ``root``."""
+    """The sweep directory (one holding multirun.yaml) under ``root`` that started last,
+    by :func:`sweep_started` (the time in its name); None when there is none."""
     root = Path(root)
     if not root.is_dir():
         return None
     sweeps = [p.parent for p in root.rglob(MULTIRUN_FILE)]
-    return max(sweeps, key=lambda p: p.stat().st_mtime) if sweeps else None
+    return max(sweeps, key=lambda p: (sweep_started(p), str(p))) if sweeps else None
+
+
+def locate_runs(path: str | os.PathLike) -> Path:
+    """A directory of runs named as the sweep printed it: absolute paths as they are,
+    relative ones from the repository root (where the commands run, so
+    ``runs/multirun/<date>/<time>`` works from a notebook in ``analysis/``), else from the
+    working directory. Raises FileNotFoundError naming both places when neither exists."""
+    from compliant_docking import REPO_ROOT
+
+    given = Path(path).expanduser()
+    if given.is_absolute():
+        candidates = [given]
+    else:
+        candidates = [REPO_ROOT / given, Path.cwd() / given]
+    for candidate in candidates:
+        if candidate.is_dir():
+            return candidate.resolve()
+    raise FileNotFoundError(
+        f"no directory {str(path)!r}: looked in " + " and ".join(str(c) for c in dict.fromkeys(candidates))
+    )

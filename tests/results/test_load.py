@@ -230,3 +230,61 @@ def test_report_draws_the_comparison_figures(real_run, tmp_path):
         for suffix in (".png", ".pdf"):
             assert (out / "comparison" / f"{stem}{suffix}").stat().st_size > 1000
     assert not (out / "comparison" / "success_vs_misalignment.png").exists()  # nothing varies
+
+
+def _sweep(root: Path, *parts: str, mtime: float | None = None) -> Path:
+    """An empty sweep directory (multirun.yaml only), optionally with a modification time."""
+    import os
+
+    path = root.joinpath(*parts)
+    path.mkdir(parents=True)
+    (path / "multirun.yaml").write_text("hydra: {}\n")
+    if mtime is not None:
+        os.utime(path / "multirun.yaml", (mtime, mtime))
+        os.utime(path, (mtime, mtime))
+    return path
+
+
+def test_newest_sweep_is_the_latest_start_in_the_names_not_the_last_touched(tmp_path):
+    import os
+    import time
+
+    from compliant_docking.results import newest_sweep, sweep_started
+
+    old = _sweep(tmp_path, "2025-06-01", "09-00-00_misalignment")
+    new = _sweep(tmp_path, "2025-06-01", "14-03-12")
+    _sweep(tmp_path, "2025-05-31", "23-59-59")
+    # a report written into the old sweep now: its folder and files are the newest on disk
+    (old / "summary.md").write_text("# report\n")
+    later = time.time() + 3600
+    os.utime(old, (later, later))
+    os.utime(old / "multirun.yaml", (later, later))
+    assert newest_sweep(tmp_path) == new
+    assert sweep_started(old).strftime("%Y-%m-%d %H:%M:%S") == "2025-06-01 09:00:00"
+    assert newest_sweep(tmp_path / "nothing-here") is None
+
+
+def test_sweeps_named_otherwise_are_dated_by_their_multirun_yaml(tmp_path):
+    from datetime import datetime
+
+    from compliant_docking.results import newest_sweep
+
+    named = _sweep(tmp_path, "2025-06-01", "14-03-12")
+    named_time = datetime(2025, 6, 1, 14, 3, 12).timestamp()
+    _sweep(tmp_path, "custom", mtime=named_time - 60)  # started a minute before
+    assert newest_sweep(tmp_path) == named
+    later = _sweep(tmp_path, "custom2", mtime=named_time + 60)  # a minute after
+    assert newest_sweep(tmp_path) == later
+
+
+def test_locate_runs_reads_relative_paths_from_the_repository_root(tmp_path, monkeypatch):
+    from compliant_docking import REPO_ROOT
+    from compliant_docking.results import locate_runs
+
+    monkeypatch.chdir(tmp_path)  # like a notebook running in analysis/
+    assert locate_runs("conf") == (REPO_ROOT / "conf").resolve()
+    (tmp_path / "only-here").mkdir()
+    assert locate_runs("only-here") == (tmp_path / "only-here").resolve()  # the working directory next
+    assert locate_runs(tmp_path) == tmp_path.resolve()
+    with pytest.raises(FileNotFoundError, match="no directory 'runs/multirun/nope'"):
+        locate_runs("runs/multirun/nope")

@@ -1,9 +1,13 @@
-"""analysis/compare_runs.ipynb executes top to bottom against a small sweep made here."""
+"""analysis/compare_runs.ipynb executes top to bottom against a small sweep made here, named
+by a path relative to the repository root (as the sweep prints it)."""
 
 from __future__ import annotations
 
 import json
+import shutil
 import sys
+import tempfile
+from pathlib import Path
 
 import pytest
 
@@ -43,13 +47,28 @@ def this_interpreter_kernel(tmp_path, monkeypatch) -> str:
     return KERNEL
 
 
-def test_notebook_runs_top_to_bottom_on_a_sweep(tmp_path, monkeypatch, this_interpreter_kernel):
-    sweep = tmp_path / "sweep"
+@pytest.fixture
+def sweep_in_the_repository():
+    """A temporary folder under the repository's runs/ (git-ignored), removed afterwards:
+    the notebook must find a sweep given relative to the repository root."""
+    runs = REPO_ROOT / "runs"
+    runs.mkdir(exist_ok=True)
+    folder = Path(tempfile.mkdtemp(prefix="notebook-test-", dir=runs))
+    yield folder
+    shutil.rmtree(folder, ignore_errors=True)
+
+
+def test_notebook_runs_top_to_bottom_on_a_sweep(monkeypatch, this_interpreter_kernel, sweep_in_the_repository):
+    sweep = sweep_in_the_repository / "sweep"
     result = sweep_cli(sweep, *SHORT, "robot=iiwa14,fr3", "hydra.callbacks.sweep.figures=false")
     assert result.returncode == 0, result.stdout[-2000:] + result.stderr[-2000:]  # none failed
     assert (sweep / "summary.md").is_file()
 
-    monkeypatch.setenv("COMPLIANT_DOCKING_SWEEP", str(sweep))
+    # as the sweep prints it: relative to the repository root, while the notebook runs in
+    # analysis/ (so the path does not exist from the notebook's working directory)
+    relative = sweep.relative_to(REPO_ROOT)
+    assert not (NOTEBOOK.parent / relative).exists()
+    monkeypatch.setenv("COMPLIANT_DOCKING_SWEEP", str(relative))
     nb = nbformat.read(NOTEBOOK, as_version=4)
     client = nbclient.NotebookClient(
         nb,
