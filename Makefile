@@ -27,8 +27,8 @@ test: $(STAMP) gl
 
 # ruff (lint and format) and mypy, configured in pyproject.toml; CI runs this before the tests
 lint: $(STAMP)
-	$(VENV)/bin/ruff check compliant_docking tests benchmarks
-	$(VENV)/bin/ruff format --check compliant_docking tests benchmarks
+	$(VENV)/bin/ruff check compliant_docking hydra_plugins tests benchmarks
+	$(VENV)/bin/ruff format --check compliant_docking hydra_plugins tests benchmarks
 	$(VENV)/bin/mypy
 
 test-slow: $(STAMP) gl

@@ -50,7 +50,8 @@ class CommandLine:
                 return resume.SKIPPED
             resume.prepare_rerun(cfg, out_dir)
         # in a sweep, each job prints one progress line (SweepCallback), not its summary
-        self.records.append(execute(cfg, out_dir, echo=hydra_cfg.mode != RunMode.MULTIRUN))
+        echo = hydra_cfg.mode != RunMode.MULTIRUN
+        self.records.append(execute(cfg, out_dir, figures=bool(cfg.get("figures", True)), echo=echo))
         return None
 
     def run(self, argv: list[str]) -> int:

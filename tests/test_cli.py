@@ -18,7 +18,12 @@ SCRIPT = Path(sys.executable).parent / "compliant-docking"
 
 def _run(*args: str, env: dict | None = None, cwd: Path = REPO_ROOT) -> subprocess.CompletedProcess:
     return subprocess.run(
-        [str(SCRIPT), *args], cwd=cwd, capture_output=True, text=True, timeout=120, env=env or dict(os.environ)
+        [str(SCRIPT), *args],
+        cwd=cwd,
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env=env or dict(os.environ),
     )
 
 

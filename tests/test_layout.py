@@ -27,6 +27,8 @@ LAYERS = (
     "run",
     "results",
     "sweep",
+    "tracking",
+    "tune",
     "cli",
 )
 #: top-level modules of the package and their layer (the rest of the top is the command line)

@@ -367,3 +367,4 @@ class Config:
     task: TaskConfig = MISSING
     render: Any = MISSING  # NoRenderConfig or RenderConfig
     viewer: bool = MISSING  # MuJoCo's interactive viewer, paced to real time (one run, a display)
+    figures: bool = MISSING  # the run's figures/ (PNG + PDF); the tuning presets turn them off

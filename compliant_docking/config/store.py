@@ -32,6 +32,7 @@ from compliant_docking.config.schemas import (
     TrackingConfig,
     TwoPhaseConfig,
 )
+from compliant_docking.config.tuning import TuningSweeperConfig
 
 _SCHEMAS: dict[str, dict[str, type]] = {
     "robot": {"robot": RobotConfig},
@@ -62,6 +63,8 @@ def register_schemas() -> None:
     for group, schemas in _SCHEMAS.items():
         for name, node in schemas.items():
             cs.store(group=f"schema/{group}", name=name, node=node)
+    # hydra/sweeper=optuna (conf/hydra/sweeper/optuna.yaml): the tuning sweeper's keys
+    cs.store(group="schema/sweeper", name="optuna", node=TuningSweeperConfig)
 
 
 def load_config(*overrides: str) -> DictConfig:

@@ -34,21 +34,33 @@ from compliant_docking.sweep.session import SweepSession
 
 
 def expected_jobs(config: DictConfig) -> int | None:
-    """How many jobs Hydra's basic sweeper will launch for ``config`` (None if unknown)."""
+    """How many jobs the sweep of ``config`` launches (None if unknown): Hydra's basic
+    sweeper, one per combination; the tuning sweeper (``hydra/sweeper=optuna``), its
+    budget of trials × the draws each trial runs (over the whole study, resumed or not)."""
     try:
-        from hydra._internal.core_plugins.basic_sweeper import BasicSweeper
-        from hydra.core.override_parser.overrides_parser import OverridesParser
-
         sweeper = config.hydra.sweeper
+        if "n_trials" in sweeper and "draws" in sweeper:  # compliant_docking.tune
+            return int(sweeper.n_trials) * _combinations(sweeper.draws, [])
         if not str(sweeper.get("_target_", "")).endswith("BasicSweeper"):
             return None
-        params = [f"{k}={v}" for k, v in (sweeper.get("params") or {}).items()]
-        params += list(config.hydra.overrides.task)
-        overrides = OverridesParser.create().parse_overrides(params)
-        batches = BasicSweeper.split_arguments(overrides, None)
-        return sum(len(batch) for batch in batches)
+        return _combinations(sweeper.get("params") or {}, list(config.hydra.overrides.task))
     except Exception:  # e.g. glob() sweeps need the config loader: count unknown
         return None
+
+
+def _combinations(params, arguments: list[str]) -> int:
+    from hydra._internal.core_plugins.basic_sweeper import BasicSweeper
+    from hydra.core.override_parser.overrides_parser import OverridesParser
+
+    def flat(node, prefix: str = "") -> list[str]:  # a.b.c=v, also when given nested
+        out = []
+        for k, v in node.items():
+            out += flat(v, f"{prefix}{k}.") if hasattr(v, "items") else [f"{prefix}{k}={v}"]
+        return out
+
+    lines = flat(params) + arguments
+    overrides = OverridesParser.create().parse_overrides(lines)
+    return sum(len(batch) for batch in BasicSweeper.split_arguments(overrides, None))
 
 
 def _workers(config: DictConfig) -> str:
@@ -73,12 +85,18 @@ class SweepCallback(Callback):
     ``figures``: also draw the comparison figures into ``<sweep>/comparison/`` at the end.
     ``progress``: print one line per finished job.
     ``resume``: the sweep resumes the one in its directory (set by ``resume=<sweep dir>``).
+    ``strict``: exit status 1 when a job failed; false (the tuning presets): a failed job
+    is a result like one that did not dock (the tuning sweeper penalises it), and only
+    an aborted sweep exits with 1.
     """
 
-    def __init__(self, figures: bool = True, progress: bool = True, resume: bool = False) -> None:
+    def __init__(
+        self, figures: bool = True, progress: bool = True, resume: bool = False, strict: bool = True
+    ) -> None:
         self.figures = bool(figures)
         self.progress = bool(progress)
         self.resume = bool(resume)
+        self.strict = bool(strict)
         self.total: int | None = None  # set in the parent, carried to the workers by pickle
 
     # -- parent process
@@ -102,7 +120,9 @@ class SweepCallback(Callback):
             session.watch(ProgressWatcher(sweep_dir, self.total))
 
     def on_multirun_end(self, config: DictConfig, **kwargs: Any) -> None:
-        SweepSession.current().finish(Path(str(config.hydra.sweep.dir)), figures=self.figures)
+        SweepSession.current().finish(
+            Path(str(config.hydra.sweep.dir)), figures=self.figures, strict=self.strict
+        )
 
     # -- worker process, after each job
     def on_job_end(self, config: DictConfig, job_return: Any, **kwargs: Any) -> None:

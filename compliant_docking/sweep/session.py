@@ -13,9 +13,9 @@ from __future__ import annotations
 
 import contextlib
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextvars import ContextVar
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from compliant_docking.sweep.progress import ProgressWatcher
@@ -34,6 +34,10 @@ class SweepSession:
     independent_jobs: bool = False  # submitit: jobs are processes that outlive the launcher
     watcher: ProgressWatcher | None = None
     outcome: SweepOutcome | None = None
+    #: called with the outcome once the sweep is summarised (e.g. the MLflow callback's
+    #: parent run, which wants the summary files: Hydra calls the end-of-sweep callbacks
+    #: in reverse order, so a callback listed after the sweep callback ends before it)
+    after_finish: list[Callable[[SweepOutcome], None]] = field(default_factory=list)
 
     @staticmethod
     def current() -> SweepSession:
@@ -69,8 +73,11 @@ class SweepSession:
         if watcher is not None:
             watcher.stop()
 
-    def finish(self, sweep_dir: Path, *, figures: bool, aborted: bool = False) -> SweepOutcome:
-        """Summarise the sweep (files, console counts) and keep its outcome."""
+    def finish(
+        self, sweep_dir: Path, *, figures: bool, aborted: bool = False, strict: bool = True
+    ) -> SweepOutcome:
+        """Summarise the sweep (files, console counts) and keep its outcome (``strict``:
+        a failed job makes the exit status 1)."""
         self.stop_watcher()
         known = self.sweep_dir is not None and Path(sweep_dir) == self.sweep_dir
         self.outcome = summarise(
@@ -80,8 +87,22 @@ class SweepSession:
             total=self.total if known else None,
             started=self.started,
             independent_jobs=self.independent_jobs,
+            strict=strict,
         )
+        for hook in self.after_finish:
+            try:
+                hook(self.outcome)
+            except Exception as exc:  # a hook never changes the outcome
+                import sys
+
+                print(f"sweep: {exc}", file=sys.stderr)
         return self.outcome
+
+    def discard(self) -> None:
+        """The sweep was refused before any job ran (e.g. a tuning set-up that cannot be
+        used): nothing to summarise, neither now nor when the command unwinds."""
+        self.stop_watcher()
+        self.sweep_dir, self.total, self.started = None, None, None
 
     def finish_aborted(self) -> SweepOutcome | None:
         """Summarise a sweep that Hydra aborted (worker crash, Ctrl-C, SIGTERM); None when no

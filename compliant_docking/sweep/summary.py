@@ -35,10 +35,11 @@ class SweepOutcome:
     unfinished: int
     aborted: bool
     summary: dict[str, Path] = field(default_factory=dict)
+    strict: bool = True  # a failed job fails the sweep (false: only an aborted sweep does)
 
     @property
     def exit_status(self) -> int:
-        return EXIT_FAILED if (self.failed or self.aborted) else EXIT_OK
+        return EXIT_FAILED if ((self.failed and self.strict) or self.aborted) else EXIT_OK
 
 
 def summarise(
@@ -49,13 +50,15 @@ def summarise(
     total: int | None = None,
     started: float | None = None,
     independent_jobs: bool = False,
+    strict: bool = True,
 ) -> SweepOutcome:
     """Summarise the sweep in ``sweep_dir``: files, console counts, the outcome.
 
     ``total``: the jobs the sweep was to run (None: unknown); ``started``: its start
     (``time.perf_counter()``); ``independent_jobs``: the jobs are processes of their own
     that may outlive the launcher (submitit), so an aborted sweep writes no records for
-    them. Never raises for what it finds on disk; a failure to draw figures is reported
+    them; ``strict``: a failed job makes the exit status 1 (else only an aborted sweep
+    does). Never raises for what it finds on disk; a failure to draw figures is reported
     and does not change the outcome.
     """
     from compliant_docking.results import counts, scan, write_summary
@@ -97,6 +100,7 @@ def summarise(
         unfinished=tally.unfinished,
         aborted=aborted,
         summary=summary,
+        strict=strict,
     )
     _report(outcome, tally, frame, missing, started, independent_jobs)
     return outcome

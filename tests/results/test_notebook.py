@@ -58,7 +58,9 @@ def sweep_in_the_repository():
     shutil.rmtree(folder, ignore_errors=True)
 
 
-def test_notebook_runs_top_to_bottom_on_a_sweep(monkeypatch, this_interpreter_kernel, sweep_in_the_repository):
+def test_notebook_runs_top_to_bottom_on_a_sweep(
+    monkeypatch, this_interpreter_kernel, sweep_in_the_repository
+):
     sweep = sweep_in_the_repository / "sweep"
     result = sweep_cli(sweep, *SHORT, "robot=iiwa14,fr3", "hydra.callbacks.sweep.figures=false")
     assert result.returncode == 0, result.stdout[-2000:] + result.stderr[-2000:]  # none failed

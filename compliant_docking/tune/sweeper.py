@@ -1,0 +1,324 @@
+"""The tuning sweeper: Optuna's ask-and-tell loop behind ``hydra/sweeper=optuna``.
+
+Hydra instantiates :class:`hydra_plugins.compliant_docking_optuna.sweeper.OptunaSweeper`
+(a subclass of :class:`TuningSweeper`: plugins must live in the ``hydra_plugins``
+namespace package) with the keys of ``hydra.sweeper`` (compliant_docking/config/tuning.py),
+then calls :meth:`TuningSweeper.sweep` with the command line's task overrides:
+
+1. the search space (:mod:`.space`), the draws, the objective (:mod:`.objectives`) and
+   the study in ``<sweep dir>/study.db`` are set up (:mod:`.study`); a rerun of the same
+   command resumes the study;
+2. while fewer than ``n_trials`` trials are told: ask ``parallel_trials`` trials, launch
+   one job per (trial, draw) through the configured launcher (joblib workers here,
+   submitit on a cluster) into ``<sweep dir>/trial<N>_draw<M>/``, read the jobs'
+   ``metrics.json`` and tell each trial its value — penalised when a draw failed or did
+   not dock; a launcher that raises penalises its batch, never stops the study;
+3. the trials table, best parameters, ready robot_controller YAML and figures are
+   written (:mod:`.outputs`, :mod:`.figures`) and the best trial printed.
+
+The jobs are ordinary runs (the sweep callback prints a line per job and summarises the
+directory at the end). A refused set-up (a search space, objective or stored study that
+cannot be used) prints one paragraph and exits with status 2 before any job runs.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from hydra.plugins.sweeper import Sweeper
+from omegaconf import DictConfig, OmegaConf
+
+from compliant_docking.sweep.progress import display, emit
+from compliant_docking.tune import objectives, space
+from compliant_docking.tune import study as studies
+
+#: exit status of a refused tuning set-up (a usage error: nothing ran)
+EXIT_REFUSED = 2
+
+
+def job_name(trial_number: int, draw: int) -> str:
+    """The job directory of one draw of one trial: ``trial007_draw2``."""
+    return f"trial{trial_number:03d}_draw{draw}"
+
+
+class TuningSweeper(Sweeper):
+    """See the module docstring; the arguments are the keys of ``hydra.sweeper``."""
+
+    def __init__(
+        self,
+        study_name: str = "tune",
+        storage: str | None = None,
+        n_trials: int = 24,
+        parallel_trials: int = 2,
+        params: Any = None,
+        draws: Any = None,
+        objective: Any = None,
+        sampler: Any = None,
+    ) -> None:
+        self.study_name = str(study_name)
+        self.storage = storage
+        self.n_trials = int(n_trials)
+        self.parallel_trials = int(parallel_trials)
+        self.params = _plain(params) or {}
+        self.draws = _plain(draws) or {}
+        self.objective_cfg = OmegaConf.create(_plain(objective) or {})
+        self.sampler_cfg = OmegaConf.create(
+            _plain(sampler) or {"name": "tpe", "seed": 0, "n_startup_trials": 8}
+        )
+        self.hydra_context: Any = None
+        self.config: DictConfig | None = None
+        self.launcher: Any = None
+
+    def setup(self, *, hydra_context, task_function, config: DictConfig) -> None:
+        from hydra.core.plugins import Plugins
+
+        self.hydra_context, self.config = hydra_context, config
+        self.launcher = Plugins.instance().instantiate_launcher(
+            hydra_context=hydra_context, task_function=task_function, config=config
+        )
+
+    # ------------------------------------------------------------------ the loop
+    def sweep(self, arguments: list[str]) -> Any:
+        assert self.config is not None and self.launcher is not None
+        sweep_dir = Path(str(self.config.hydra.sweep.dir))
+        try:
+            plan = self._plan(list(arguments), sweep_dir)
+        except (ValueError, RuntimeError) as exc:  # search space, objective, study, composition
+            return self._refuse(exc)
+        study = plan["study"]
+        returns: list = []
+        while (todo := self.n_trials - len(studies.completed(study))) > 0:
+            trials = [study.ask(plan["distributions"]) for _ in range(min(self.parallel_trials, todo))]
+            returns.append(self._run_batch(trials, plan, sweep_dir))
+        self._finish(plan, sweep_dir)
+        return returns
+
+    def _plan(self, arguments: list[str], sweep_dir: Path) -> dict:
+        """Everything the loop needs, checked before any job runs; prints the header."""
+        from compliant_docking.run.rundir import MULTIRUN_FILE
+
+        if self.n_trials < 1 or self.parallel_trials < 1:
+            raise ValueError(
+                f"hydra.sweeper.n_trials ({self.n_trials}) and hydra.sweeper.parallel_trials "
+                f"({self.parallel_trials}) must be at least 1"
+            )
+        objective = objectives.get(str(self.objective_cfg.get("name", "mean_force")))
+        keys, notes = objectives.resolve_metrics(objective, self.objective_cfg)
+        tuned, fixed = space.parse_space(self.params, arguments)
+        draws = space.expand_draws(self.draws, tuned)
+        if str(self.sampler_cfg.get("name")) == "grid" and self.n_trials > studies.grid_size(tuned):
+            notes.append(f"sampler grid: {studies.grid_size(tuned)} points, so at most that many trials")
+            self.n_trials = studies.grid_size(tuned)
+        self._validate(fixed, tuned, draws)
+        definition = {
+            "objective": objective.name,
+            "metrics": keys,
+            "require_docking": bool(self.objective_cfg.get("require_docking", True)),
+            "penalty": float(self.objective_cfg.get("penalty", 1000.0)),
+            "draws": draws,
+            "fixed": sorted(fixed),  # the order on the command line does not matter
+        }
+        sweep_dir.mkdir(parents=True, exist_ok=True)
+        OmegaConf.save(self.config, sweep_dir / MULTIRUN_FILE)
+        url = studies.storage_url(self.storage, sweep_dir)
+        study = studies.open_study(self.study_name, url, None, objective.directions, definition)
+        study.sampler = studies.make_sampler(self.sampler_cfg, tuned, seed_offset=len(study.trials))
+        retried = studies.recover_interrupted(study)
+        done = len(studies.completed(study))
+        description = objective.description.format(
+            force=keys.get("force"), time=keys.get("time"), draws=len(draws)
+        )
+        emit(f"tune: study {self.study_name} in {display(Path(url.removeprefix('sqlite:///')))}")
+        emit(f"  objective {objective.name}: {description}")
+        emit(f"  search space: {', '.join(f'{p.key} {_describe(p.distribution)}' for p in tuned)}")
+        emit(
+            f"  budget {self.n_trials} trials, {self.parallel_trials} at a time "
+            f"({self.parallel_trials * len(draws)} jobs per batch); {done} told earlier"
+            + (f", trials {retried} were interrupted and are asked again" if retried else "")
+        )
+        for note in notes:
+            emit(f"  note: {note}")
+        return {
+            "study": study,
+            "objective": objective,
+            "keys": keys,
+            "tuned": tuned,
+            "fixed": fixed,
+            "draws": draws,
+            "definition": definition,
+            "distributions": {p.key: p.distribution for p in tuned},
+            "started": time.perf_counter(),
+        }
+
+    def _jobs(self, trial_number: int, params: dict, plan: dict) -> list[list[str]]:
+        settings = [p.override(params[p.key]) for p in plan["tuned"]]
+        return [
+            [*plan["fixed"], *settings, *draw, f"hydra.sweep.subdir={job_name(trial_number, i)}"]
+            for i, draw in enumerate(plan["draws"])
+        ]
+
+    def _validate(self, fixed: list[str], tuned: Sequence[space.Param], draws: list[list[str]]) -> None:
+        """Compose one job per draw (lowest values) now: a wrong key fails here, named by Hydra."""
+        from hydra.errors import HydraException
+
+        first = {p.key: _first_value(p.distribution) for p in tuned}
+        plan = {"fixed": fixed, "tuned": tuned, "draws": draws}
+        try:
+            self.validate_batch_is_legal(self._jobs(0, first, plan))
+        except HydraException as exc:
+            raise ValueError(f"a job of this study cannot be composed: {exc}") from None
+
+    def _run_batch(self, trials: list, plan: dict, sweep_dir: Path) -> Sequence[Any]:
+        """Launch every draw of ``trials``, then tell each trial its value."""
+        jobs = [job for t in trials for job in self._jobs(t.number, t.params, plan)]
+        n_draws = len(plan["draws"])
+        crash = None
+        try:
+            results = self.launcher.launch(jobs, initial_job_idx=trials[0].number * n_draws)
+        except Exception as exc:  # e.g. a worker process died: penalise the batch, go on
+            results, crash = [], f"{type(exc).__name__}: {str(exc).strip()[:300]}"
+            emit(
+                f"tune: the launcher failed for trials {[t.number for t in trials]} ({crash}); they are penalised"
+            )
+            self._record_orphans(trials, n_draws, sweep_dir)
+        study, objective = plan["study"], plan["objective"]
+        for trial in trials:
+            draws = [objectives.Draw.read(sweep_dir / job_name(trial.number, i)) for i in range(n_draws)]
+            result = objectives.evaluate(objective, draws, plan["keys"], self.objective_cfg)
+            for key, value in result.attrs.items():
+                trial.set_user_attr(key, value)
+            if crash:
+                trial.set_user_attr("launcher_error", crash)
+            study.tell(trial, result.values[0] if len(result.values) == 1 else list(result.values))
+            emit(self._trial_line(trial, result, plan))
+        return results
+
+    @staticmethod
+    def _record_orphans(trials: list, n_draws: int, sweep_dir: Path) -> None:
+        from compliant_docking.run.rundir import METRICS_FILE
+        from compliant_docking.sweep.summary import record_orphan
+
+        for trial in trials:
+            for i in range(n_draws):
+                job_dir = sweep_dir / job_name(trial.number, i)
+                if job_dir.is_dir() and not (job_dir / METRICS_FILE).exists():
+                    record_orphan(job_dir)
+
+    def _trial_line(self, trial, result: objectives.Evaluation, plan: dict) -> str:
+        objective = plan["objective"]
+        params = " ".join(f"{k}={_short(v)}" for k, v in trial.params.items())
+        values = " · ".join(f"{n} {_short(v)}" for n, v in zip(objective.value_names, result.values))
+        docked = f"{result.attrs['docked']}/{result.attrs['draws']} docked"
+        if result.feasible:
+            line = f"trial {trial.number} · {params} · {values} ({docked})"
+        else:
+            first = (result.attrs.get("problems") or ["?"])[0][:140]
+            line = f"trial {trial.number} · {params} · PENALISED {values} ({docked}; {first})"
+        if len(objective.value_names) == 1:
+            from compliant_docking.tune.outputs import best_trials
+
+            best = best_trials(plan["study"], objective)
+            if best:
+                line += f" · best: trial {best[0].number} ({_short(best[0].values[0])})"
+        return line
+
+    # ------------------------------------------------------------------ the end
+    def _finish(self, plan: dict, sweep_dir: Path) -> None:
+        from compliant_docking.tune import figures, outputs
+
+        assert self.config is not None
+        study, objective = plan["study"], plan["objective"]
+        choices = self.config.hydra.runtime.choices
+        robot, controller = str(choices.get("robot")), str(choices.get("controller"))
+        controller_cfg = OmegaConf.to_container(self.config.controller, resolve=True)
+        frame = outputs.trials_frame(study, objective)
+        written = outputs.write_trials(frame, sweep_dir)
+        written += outputs.write_best(
+            study,
+            objective,
+            sweep_dir,
+            robot=robot,
+            controller=controller,
+            controller_cfg=controller_cfg if isinstance(controller_cfg, dict) else {},
+            definition=plan["definition"],
+        )
+        try:
+            metric = plan["keys"].get("force", "")
+            written += figures.plot_history(frame, objective, sweep_dir / "tuning", metric)
+            written += figures.plot_pareto(frame, objective, sweep_dir / "tuning", metric)
+        except Exception as exc:  # figures are a convenience; the tables are the record
+            emit(f"tune: the figures failed ({type(exc).__name__}: {exc})")
+        self._report(study, objective, written, sweep_dir, robot, controller)
+
+    def _report(
+        self, study, objective, written: list[Path], sweep_dir: Path, robot: str, controller: str
+    ) -> None:
+        from compliant_docking.tune.outputs import best_trials, describe
+
+        best = best_trials(study, objective)
+        told = studies.completed(study)
+        feasible = sum(1 for t in told if t.user_attrs.get("feasible"))
+        lines = ["=" * 64, f"tune finished: {len(told)} trials told, {feasible} docked in every draw"]
+        if not best:
+            lines.append(
+                "  no trial docked in every draw: no gains written (widen the search space or the budget)"
+            )
+        elif len(objective.value_names) == 1:
+            lines.append(f"  best {describe(best[0], objective)}")
+        else:
+            lines.append(f"  Pareto front ({len(best)} trials):")
+            lines += [f"    {describe(t, objective)}" for t in best]
+        ready = [p for p in written if p.name == f"{robot}_{controller}.yaml"]
+        if len(ready) == 1:
+            lines.append(
+                f"  ready gains: {display(ready[0])}  (copy to conf/robot_controller/{ready[0].name})"
+            )
+        elif ready:
+            lines.append(
+                f"  ready gains, one per Pareto trial: {display(sweep_dir / 'pareto')}/trial<N>/{ready[0].name}"
+                f"  (copy one to conf/robot_controller/)"
+            )
+        lines.append(
+            f"  trials: {display(sweep_dir / 'trials.csv')} (+ .parquet), best: {display(sweep_dir / 'best_params.yaml')}"
+        )
+        lines.append(f"  figures: {display(sweep_dir / 'tuning')}/")
+        lines.append("=" * 64)
+        emit("\n".join(lines))
+
+    def _refuse(self, exc: Exception) -> None:
+        """Print why the tuning cannot start and exit (status 2); nothing ran."""
+        from compliant_docking.sweep.session import SweepSession
+
+        SweepSession.current().discard()
+        print(f"tune: {exc}", file=sys.stderr)
+        raise SystemExit(EXIT_REFUSED)
+
+
+def _plain(node) -> Any:
+    return OmegaConf.to_container(node, resolve=True) if OmegaConf.is_config(node) else node
+
+
+def _short(value) -> str:
+    return f"{value:.4g}" if isinstance(value, float) else str(value)
+
+
+def _first_value(distribution) -> Any:
+    from optuna.distributions import CategoricalDistribution
+
+    if isinstance(distribution, CategoricalDistribution):
+        return distribution.choices[0]
+    return distribution.low
+
+
+def _describe(distribution) -> str:
+    from optuna.distributions import CategoricalDistribution
+
+    if isinstance(distribution, CategoricalDistribution):
+        return "{" + ", ".join(map(str, distribution.choices)) + "}"
+    log = " log" if getattr(distribution, "log", False) else ""
+    step = f" step {distribution.step}" if getattr(distribution, "step", None) not in (None, 1) else ""
+    return f"[{distribution.low}, {distribution.high}]{log}{step}"
