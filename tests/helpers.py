@@ -55,10 +55,15 @@ SHORT_SWEEP = (
 
 
 def sweep_cli(
-    sweep_dir: Path, *args: str, pythonpath: Path | None = None, timeout: float = 300
+    sweep_dir: Path,
+    *args: str,
+    pythonpath: Path | None = None,
+    timeout: float = 300,
+    env: dict[str, str] | None = None,
 ) -> subprocess.CompletedProcess:
-    """``python -m compliant_docking -m args…`` with 2 workers into ``sweep_dir``."""
-    env = {**os.environ, "PYTHONUNBUFFERED": "1"}
+    """``python -m compliant_docking -m args…`` with 2 workers into ``sweep_dir``
+    (``env``: variables to set for it)."""
+    env = {**os.environ, "PYTHONUNBUFFERED": "1", **(env or {})}
     if pythonpath is not None:
         env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(pythonpath), env.get("PYTHONPATH")]))
     return subprocess.run(

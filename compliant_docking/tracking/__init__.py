@@ -1,0 +1,2 @@
+"""Experiment tracking: ``+tracking=mlflow`` logs every job to MLflow
+(:mod:`.mlflow_callback`; the ``tracking`` extra; docs/tracking.md)."""

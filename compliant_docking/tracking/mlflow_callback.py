@@ -1,0 +1,281 @@
+"""``+tracking=mlflow``: every job logged to MLflow (conf/tracking/mlflow.yaml, docs/tracking.md).
+
+A Hydra callback, :class:`MlflowCallback`, beside the sweep callback:
+
+- a single run is one MLflow run in the experiment (``experiment``, default
+  ``compliant-docking``);
+- a sweep (``-m``, also a tuning study) is one parent run, created by the launching
+  process when the sweep starts (and found again by its sweep directory when the sweep
+  is resumed), with one child run per job, logged by the worker that ran the job;
+- each job's run holds its full resolved config as parameters (dotted keys:
+  ``controller.k``, ``task.misalignment.seed``, …), every number of its metrics.json
+  as a metric (``success`` as 1/0), the other fields as tags (status, error, options,
+  provenance), and its artefacts: ``figures/``, the video, ``summary.txt``,
+  ``metrics.json``, the composed config (and the time series with ``timeseries=true``);
+- the parent run gets the sweep's summary files and figures (and a tuning study's best
+  parameters and trials table) when the sweep ends.
+
+Where: ``tracking_uri``, else the environment's ``MLFLOW_TRACKING_URI``, else the local
+file store ``runs/mlruns`` (MLflow 3 keeps its file store in maintenance mode and asks for
+``MLFLOW_ALLOW_FILE_STORE=true``, which this callback sets for that store only).
+Tracking never fails a job or a sweep: a run that cannot be logged prints one line.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import time
+from pathlib import Path
+from typing import Any
+
+from hydra.experimental.callback import Callback
+from omegaconf import DictConfig, OmegaConf
+
+from compliant_docking.run import rundir
+from compliant_docking.sweep.progress import emit
+from compliant_docking.sweep.session import SweepSession
+
+#: the default local store, relative to the working directory (the repository root)
+DEFAULT_STORE = Path("runs") / "mlruns"
+#: tag naming the sweep directory of a parent run (how a resumed sweep finds its parent)
+SWEEP_TAG = "compliant_docking.sweep_dir"
+JOB_TAG = "compliant_docking.job_dir"
+#: MLflow's limits: values per log_batch call, characters per param / tag value
+BATCH, PARAM_CHARS, TAG_CHARS = 100, 6000, 5000
+#: files of a sweep directory logged with its parent run (summaries, tuning outputs)
+SWEEP_FILES = (
+    "summary.md",
+    "summary.csv",
+    "comparison.csv",
+    "best_params.yaml",
+    "trials.csv",
+)
+SWEEP_FOLDERS = ("comparison", "tuning", "pareto")
+
+
+class TrackingUnavailable(RuntimeError):
+    """MLflow is not installed: the message says how to install it."""
+
+
+def flatten(node: Any, prefix: str = "") -> dict[str, Any]:
+    """A nested config as ``{"controller.k": 300.0, …}`` (lists stay values)."""
+    if isinstance(node, dict):
+        out: dict[str, Any] = {}
+        for key, value in node.items():
+            out.update(flatten(value, f"{prefix}{key}."))
+        return out
+    return {prefix[:-1]: node}
+
+
+def param_text(value: Any) -> str:
+    """A config value as MLflow parameter text: JSON for lists and null, else str."""
+    text = json.dumps(value) if isinstance(value, (list, dict)) or value is None else str(value)
+    return text[:PARAM_CHARS]
+
+
+class MlflowCallback(Callback):
+    """See the module docstring. ``experiment``: the MLflow experiment; ``tracking_uri``:
+    the store (null: ``MLFLOW_TRACKING_URI`` or ``runs/mlruns``); ``artifacts``: log the
+    job's files; ``timeseries``: also its timeseries.parquet (a few MB a run)."""
+
+    def __init__(
+        self,
+        experiment: str = "compliant-docking",
+        tracking_uri: str | None = None,
+        artifacts: bool = True,
+        timeseries: bool = False,
+    ) -> None:
+        self.experiment = str(experiment)
+        self.tracking_uri = tracking_uri
+        self.artifacts = bool(artifacts)
+        self.timeseries = bool(timeseries)
+        self.uri: str | None = None  # resolved in the launching process, carried to the workers
+        self.parent_run_id: str | None = None
+
+    # ------------------------------------------------------------------ the store
+    def resolve_uri(self) -> str:
+        if self.tracking_uri:
+            return str(self.tracking_uri)
+        if os.environ.get("MLFLOW_TRACKING_URI"):
+            return os.environ["MLFLOW_TRACKING_URI"]
+        return (Path.cwd() / DEFAULT_STORE).resolve().as_uri()
+
+    def client(self):
+        try:
+            from mlflow.tracking import MlflowClient
+        except ImportError:
+            raise TrackingUnavailable(
+                "+tracking=mlflow needs MLflow: pip install -e '.[tracking]' (mlflow-skinny)"
+            ) from None
+        uri = self.uri or self.resolve_uri()
+        if uri.startswith("file:") or "://" not in uri:
+            os.environ.setdefault("MLFLOW_ALLOW_FILE_STORE", "true")  # MLflow 3: maintenance mode
+        return MlflowClient(tracking_uri=uri)
+
+    def experiment_id(self, client) -> str:
+        found = client.get_experiment_by_name(self.experiment)
+        if found is not None:
+            return found.experiment_id
+        try:
+            return client.create_experiment(self.experiment)
+        except Exception:  # another worker created it meanwhile
+            found = client.get_experiment_by_name(self.experiment)
+            if found is None:
+                raise
+            return found.experiment_id
+
+    # ------------------------------------------------------------------ launching process
+    def on_run_start(self, config: DictConfig, **kwargs: Any) -> None:
+        self.uri = self.resolve_uri()
+
+    def on_multirun_start(self, config: DictConfig, **kwargs: Any) -> None:
+        self.uri = self.resolve_uri()
+        try:
+            client = self.client()
+            experiment_id = self.experiment_id(client)
+            sweep_dir = Path(str(config.hydra.sweep.dir)).resolve()
+            self.parent_run_id = self._parent(client, experiment_id, sweep_dir, config)
+            SweepSession.current().after_finish.append(self._finish_parent)
+            emit(f"mlflow: sweep → run {self.parent_run_id} of experiment {self.experiment!r} at {self.uri}")
+        except Exception as exc:  # tracking must never stop a sweep
+            emit(f"mlflow: tracking off for this sweep ({type(exc).__name__}: {exc})")
+            self.parent_run_id = None
+            self.uri = None
+
+    def _parent(self, client, experiment_id: str, sweep_dir: Path, config: DictConfig) -> str:
+        """The sweep's parent run: the one of an earlier start of this sweep directory
+        (a resumed sweep or tuning study), else a new one."""
+        quoted = str(sweep_dir).replace("'", "\\'")
+        found = client.search_runs(
+            [experiment_id], filter_string=f"tags.`{SWEEP_TAG}` = '{quoted}'", max_results=1
+        )
+        if found:
+            run_id = found[0].info.run_id
+            client.update_run(run_id, status="RUNNING")
+            return run_id
+        overrides = " ".join(str(o) for o in config.hydra.overrides.task)
+        tags = {SWEEP_TAG: str(sweep_dir), "overrides": overrides[:TAG_CHARS], "kind": "sweep"}
+        sweeper = str(OmegaConf.select(config, "hydra.sweeper._target_", default="") or "")
+        tags["sweeper"] = sweeper.rsplit(".", 1)[-1]
+        run = client.create_run(experiment_id, run_name=_sweep_name(sweep_dir), tags=tags)
+        return run.info.run_id
+
+    def _finish_parent(self, outcome) -> None:
+        """When the sweep is summarised: its files, counts and status on the parent run."""
+        if self.parent_run_id is None:
+            return
+        from mlflow.entities import Metric
+
+        try:
+            client = self.client()
+            sweep_dir = Path(outcome.sweep_dir)
+            for name in SWEEP_FILES:
+                if (sweep_dir / name).is_file():
+                    client.log_artifact(self.parent_run_id, str(sweep_dir / name))
+            for folder in SWEEP_FOLDERS:
+                if (sweep_dir / folder).is_dir():
+                    client.log_artifacts(self.parent_run_id, str(sweep_dir / folder), folder)
+            now = int(time.time() * 1000)
+            counts = {
+                "jobs": outcome.jobs,
+                "ok": outcome.ok,
+                "failed": outcome.failed,
+                "docked": outcome.docked,
+            }
+            client.log_batch(
+                self.parent_run_id, metrics=[Metric(k, float(v), now, 0) for k, v in counts.items()]
+            )
+            client.set_terminated(self.parent_run_id, "KILLED" if outcome.aborted else "FINISHED")
+        except Exception as exc:  # tracking never changes a sweep's outcome
+            emit(f"mlflow: could not finish the sweep's run ({type(exc).__name__}: {exc})")
+
+    # ------------------------------------------------------------------ the job's process
+    def on_job_end(self, config: DictConfig, job_return: Any, **kwargs: Any) -> None:
+        from compliant_docking.sweep import resume
+
+        if getattr(job_return, "_return_value", None) == resume.SKIPPED:
+            return  # a resumed sweep kept this job: it was logged when it ran
+        out_dir = Path(str(config.hydra.runtime.output_dir))
+        try:
+            run_id = self.log_job(out_dir, _task_config(config, job_return))
+            if self.parent_run_id is None:  # a single run: say where it went
+                emit(
+                    f"mlflow: run {run_id} of experiment {self.experiment!r} at {self.uri or self.resolve_uri()}"
+                )
+        except Exception as exc:  # tracking never fails a job
+            emit(f"mlflow: could not log {out_dir.name} ({type(exc).__name__}: {exc})")
+
+    def log_job(self, out_dir: Path, cfg: dict) -> str:
+        """Log one finished job directory as a run (a child of the sweep's); its id."""
+        from mlflow.entities import Metric, Param, RunTag
+
+        client = self.client()
+        experiment_id = self.experiment_id(client)
+        record, problem = rundir.read_metrics(out_dir)
+        record = record or {"status": "failed", "error": problem}
+        tags = {JOB_TAG: str(out_dir.resolve()), "kind": "job"}
+        if self.parent_run_id:
+            tags["mlflow.parentRunId"] = self.parent_run_id
+        run = client.create_run(experiment_id, run_name=out_dir.name, tags=tags, start_time=_millis(record))
+        run_id = run.info.run_id
+        now = int(time.time() * 1000)
+        metrics, text = [], []
+        for key, value in record.items():
+            if isinstance(value, bool):
+                metrics.append(Metric(key, float(value), now, 0))
+            elif isinstance(value, (int, float)):
+                metrics.append(Metric(key, float(value), now, 0))
+            elif value is not None:
+                text.append(RunTag(key, str(value)[:TAG_CHARS]))
+        params = [Param(k, param_text(v)) for k, v in flatten(cfg).items()]
+        for i in range(0, max(len(params), len(metrics), len(text)), BATCH):
+            client.log_batch(
+                run_id, metrics=metrics[i : i + BATCH], params=params[i : i + BATCH], tags=text[i : i + BATCH]
+            )
+        if self.artifacts:
+            self._artifacts(client, run_id, out_dir)
+        status = "FAILED" if record.get("status") == "failed" else "FINISHED"
+        client.set_terminated(run_id, status)
+        return run_id
+
+    def _artifacts(self, client, run_id: str, out_dir: Path) -> None:
+        from compliant_docking.viz.render import VIDEO_FILE
+
+        files = [rundir.METRICS_FILE, rundir.SUMMARY_FILE, VIDEO_FILE]
+        if self.timeseries:
+            files.append(rundir.TIMESERIES_FILE)
+        for name in files:
+            if (out_dir / name).is_file():
+                client.log_artifact(run_id, str(out_dir / name))
+        if (out_dir / rundir.FIGURES_DIR).is_dir():
+            client.log_artifacts(run_id, str(out_dir / rundir.FIGURES_DIR), rundir.FIGURES_DIR)
+        config_file = out_dir / rundir.HYDRA_DIR / rundir.CONFIG_FILE
+        if config_file.is_file():
+            client.log_artifact(run_id, str(config_file), "hydra")
+
+
+def _task_config(config: DictConfig, job_return: Any) -> dict:
+    """The job's composed config without Hydra's node, resolved, as plain data."""
+    cfg = getattr(job_return, "cfg", None)
+    if cfg is None:
+        cfg = OmegaConf.masked_copy(config, [str(k) for k in config if k != "hydra"])
+    data = OmegaConf.to_container(cfg, resolve=True, enum_to_str=True)
+    if isinstance(data, dict):
+        data.pop("hydra", None)
+        return data
+    return {}
+
+
+def _millis(record: dict) -> int | None:
+    from datetime import datetime
+
+    try:
+        return int(datetime.fromisoformat(str(record["started_at"])).timestamp() * 1000)
+    except (KeyError, TypeError, ValueError):
+        return None
+
+
+def _sweep_name(sweep_dir: Path) -> str:
+    """``multirun/2025-06-01/14-03-12`` or ``tune/fr3_impedance``: the sweep's last parts."""
+    return "/".join(sweep_dir.parts[-3:]) if "multirun" in sweep_dir.parts else "/".join(sweep_dir.parts[-2:])

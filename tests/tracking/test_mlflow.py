@@ -1,0 +1,123 @@
+"""+tracking=mlflow: a sweep logged into a temporary store holds one parent run and one
+child run per job with the job's config, metrics and files; a single run; and tracking
+that cannot log never fails the job."""
+
+from __future__ import annotations
+
+import json
+import sys
+
+import pytest
+import yaml
+from omegaconf import OmegaConf
+
+from compliant_docking.tracking.mlflow_callback import MlflowCallback, flatten, param_text
+from tests.helpers import SHORT_SWEEP as SHORT
+from tests.helpers import sweep_cli
+
+
+@pytest.fixture
+def store(tmp_path, monkeypatch):
+    """A file store of its own (MLflow 3 wants MLFLOW_ALLOW_FILE_STORE for reading it too)."""
+    monkeypatch.setenv("MLFLOW_ALLOW_FILE_STORE", "true")
+    return (tmp_path / "mlruns").as_uri()
+
+
+def runs_of(uri: str, experiment: str = "compliant-docking"):
+    from mlflow.tracking import MlflowClient
+
+    client = MlflowClient(uri)
+    found = client.get_experiment_by_name(experiment)
+    assert found is not None, f"no experiment {experiment!r} in {uri}"
+    return client, client.search_runs([found.experiment_id])
+
+
+def test_a_sweep_is_a_parent_run_with_one_child_run_per_job(tmp_path, store):
+    sweep = tmp_path / "sweep"
+    result = sweep_cli(
+        sweep,
+        *SHORT,
+        "robot=iiwa14,fr3",
+        "+tracking=mlflow",
+        "hydra.callbacks.sweep.figures=false",
+        env={"MLFLOW_TRACKING_URI": store},
+    )
+    assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-3000:]
+    assert "mlflow: could not" not in result.stdout
+    jobs = sorted(p for p in sweep.iterdir() if (p / "metrics.json").is_file())
+    assert len(jobs) == 2 and all("tracking" not in p.name for p in jobs)  # not in the job names
+
+    client, runs = runs_of(store)
+    parents = [r for r in runs if "mlflow.parentRunId" not in r.data.tags]
+    children = [r for r in runs if "mlflow.parentRunId" in r.data.tags]
+    assert len(parents) == 1 and len(children) == 2
+    parent = parents[0]
+    assert parent.data.tags["compliant_docking.sweep_dir"] == str(sweep.resolve())
+    assert parent.data.metrics["jobs"] == 2 and parent.info.status == "FINISHED"
+    assert {"summary.md", "summary.csv"} <= {a.path for a in client.list_artifacts(parent.info.run_id)}
+
+    for run in children:
+        assert run.data.tags["mlflow.parentRunId"] == parent.info.run_id
+        job = next(p for p in jobs if p.name == run.info.run_name)
+        record = json.loads((job / "metrics.json").read_text())
+        config = OmegaConf.to_container(OmegaConf.load(job / ".hydra" / "config.yaml"), resolve=True)
+        # the full resolved config as parameters
+        expected = {k: param_text(v) for k, v in flatten(config).items()}
+        assert run.data.params == expected
+        assert run.data.params["robot.name"] == record["robot"]
+        # every number of metrics.json as a metric, the rest as tags
+        assert run.data.metrics["peak_axial_force_N"] == pytest.approx(record["peak_axial_force_N"])
+        assert run.data.metrics["success"] == float(record["success"])
+        assert run.data.tags["status"] == record["status"] == "ok"
+        assert run.data.tags["config_hash"] == record["config_hash"]
+        files = {a.path for a in client.list_artifacts(run.info.run_id)}
+        assert {"metrics.json", "summary.txt", "figures", "hydra"} <= files
+        figures = {a.path for a in client.list_artifacts(run.info.run_id, "figures")}
+        assert "figures/contact_force.png" in figures
+
+
+def job_dir(tmp_path):
+    """A finished job directory as the runner leaves it (no simulation needed)."""
+    job = tmp_path / "runs" / "2025-06-01" / "14-03-12_fr3_impedance_quintic"
+    (job / ".hydra").mkdir(parents=True)
+    (job / "figures").mkdir()
+    (job / "figures" / "contact_force.png").write_bytes(b"\x89PNG")
+    cfg = {
+        "controller": {"k": 300.0, "name": "impedance"},
+        "task": {"stroke": [0.0, 0.0, -0.18], "init_pos": None},
+    }
+    (job / ".hydra" / "config.yaml").write_text(yaml.safe_dump(cfg))
+    record = {"status": "ok", "error": None, "success": True, "peak_axial_force_N": 33.5, "robot": "fr3"}
+    (job / "metrics.json").write_text(json.dumps(record))
+    config = OmegaConf.create({**cfg, "hydra": {"runtime": {"output_dir": str(job)}}})
+    return job, config, cfg
+
+
+def test_a_single_run_is_a_run_of_its_own(tmp_path, store, capsys):
+    job, config, cfg = job_dir(tmp_path)
+    callback = MlflowCallback(tracking_uri=store)
+    callback.on_run_start(config)
+    callback.on_job_end(config, job_return=None)
+    assert "mlflow: run " in capsys.readouterr().out
+    _, runs = runs_of(store)
+    (run,) = runs
+    assert "mlflow.parentRunId" not in run.data.tags
+    assert run.data.params == {
+        "controller.k": "300.0",
+        "controller.name": "impedance",
+        "task.stroke": "[0.0, 0.0, -0.18]",
+        "task.init_pos": "null",
+    }
+    assert run.data.metrics == {"success": 1.0, "peak_axial_force_N": 33.5}
+    assert run.data.tags["robot"] == "fr3" and run.info.status == "FINISHED"
+
+
+def test_tracking_that_cannot_log_says_so_and_never_fails_the_job(tmp_path, monkeypatch, capsys):
+    job, config, _ = job_dir(tmp_path)
+    monkeypatch.setitem(sys.modules, "mlflow.tracking", None)  # as if MLflow were not installed
+    callback = MlflowCallback(tracking_uri=(tmp_path / "mlruns").as_uri())
+    callback.on_run_start(config)
+    callback.on_job_end(config, job_return=None)  # does not raise
+    out = capsys.readouterr().out
+    assert "mlflow: could not log 14-03-12_fr3_impedance_quintic" in out
+    assert "pip install -e '.[tracking]'" in out
