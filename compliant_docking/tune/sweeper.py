@@ -38,6 +38,9 @@ from compliant_docking.tune import study as studies
 
 #: exit status of a refused tuning set-up (a usage error: nothing ran)
 EXIT_REFUSED = 2
+#: config groups whose overrides do not change what a trial computes (a study resumed
+#: with or without them is the same study)
+NOT_DEFINING = ("tracking",)
 
 
 def job_name(trial_number: int, draw: int) -> str:
@@ -120,7 +123,8 @@ class TuningSweeper(Sweeper):
             "require_docking": bool(self.objective_cfg.get("require_docking", True)),
             "penalty": float(self.objective_cfg.get("penalty", 1000.0)),
             "draws": draws,
-            "fixed": sorted(fixed),  # the order on the command line does not matter
+            # the order on the command line does not matter, nor does tracking (+tracking=mlflow)
+            "fixed": sorted(f for f in fixed if f.lstrip("+").split("=", 1)[0] not in NOT_DEFINING),
         }
         sweep_dir.mkdir(parents=True, exist_ok=True)
         OmegaConf.save(self.config, sweep_dir / MULTIRUN_FILE)

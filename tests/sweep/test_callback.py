@@ -166,3 +166,24 @@ def test_jobs_finishing_together_get_distinct_progress_counts(tmp_path):
         os.utime(job / "metrics.json", ns=(10**18 + i, 10**18 + i))
     lines = [job_line(tmp_path / name, tmp_path.resolve(), 3) for name in ("1_b", "0_a")]
     assert [line[:6] for line in lines] == ["[2/3] ", "[1/3] "]
+
+
+def test_strict_false_makes_failed_jobs_results_but_not_an_aborted_sweep(tmp_path):
+    outcome = SweepOutcome(sweep_dir=tmp_path, jobs=4, ok=3, failed=1, docked=2, unfinished=0, aborted=False)
+    assert outcome.exit_status == 1  # the default: a failed job fails the sweep
+    outcome.strict = False  # the tuning presets: a diverging trial is a penalised result
+    assert outcome.exit_status == 0
+    outcome.aborted = True
+    assert outcome.exit_status == 1
+
+
+def test_the_expected_jobs_of_a_tuning_study_are_trials_times_draws():
+    register_schemas()
+    GlobalHydra.instance().clear()
+    with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
+        cfg = compose(
+            config_name="config",
+            overrides=["+experiment=tune", "hydra.sweeper.n_trials=5", "+hydra.sweeper.draws.task.x='1,2,3'"],
+            return_hydra_config=True,
+        )
+    assert expected_jobs(cfg) == 5 * 4 * 3  # seeds 0-3 of the preset × the 3 values added
