@@ -79,13 +79,7 @@ class MlflowCallback(Callback):
     the store (null: ``MLFLOW_TRACKING_URI`` or ``runs/mlruns``); ``artifacts``: log the
     job's files; ``timeseries``: also its timeseries.parquet (a few MB a run)."""
 
-    def __init__(
-        self,
-        experiment: str = "compliant-docking",
-        tracking_uri: str | None = None,
-        artifacts: bool = True,
-        timeseries: bool = False,
-    ) -> None:
+    def __init__(self, experiment: str, tracking_uri: str | None, artifacts: bool, timeseries: bool) -> None:
         self.experiment = str(experiment)
         self.tracking_uri = tracking_uri
         self.artifacts = bool(artifacts)

@@ -162,7 +162,7 @@ class Evaluation:
 def evaluate(objective: Objective, draws: Sequence[Draw], keys: dict[str, str], cfg: Any) -> Evaluation:
     """Score one trial from its draws (see the module docstring); never raises for what
     the draws hold. ``keys``: :func:`resolve_metrics`; ``cfg``: ``hydra.sweeper.objective``."""
-    require = bool(cfg.get("require_docking", True))
+    require = bool(cfg.require_docking)
     reasons = [d.why_not(keys, require) for d in draws]
     bad = [f"{d.job}: {why}"[:300] for d, why in zip(draws, reasons) if why is not None]
     counted = [d for d, why in zip(draws, reasons) if why is None]
@@ -178,7 +178,7 @@ def evaluate(objective: Objective, draws: Sequence[Draw], keys: dict[str, str], 
         attrs[f"{role}_per_draw"] = [_number(d.record.get(key)) if d.record else None for d in draws]
     if bad or not draws:
         share = len(bad) / len(draws) if draws else 1.0
-        penalty = float(cfg.get("penalty", 1000.0)) * (1.0 + share)
+        penalty = float(cfg.penalty) * (1.0 + share)
         return Evaluation(tuple(penalty for _ in objective.value_names), False, attrs)
     rows = [{role: float(d.record[key]) for role, key in keys.items()} for d in counted if d.record]
     return Evaluation(tuple(float(v) for v in objective.score(rows)), True, attrs)

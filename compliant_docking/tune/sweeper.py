@@ -53,14 +53,14 @@ class TuningSweeper(Sweeper):
 
     def __init__(
         self,
-        study_name: str = "tune",
-        storage: str | None = None,
-        n_trials: int = 24,
-        parallel_trials: int = 2,
-        params: Any = None,
-        draws: Any = None,
-        objective: Any = None,
-        sampler: Any = None,
+        study_name: str,
+        storage: str | None,
+        n_trials: int,
+        parallel_trials: int,
+        params: Any,
+        draws: Any,
+        objective: Any,
+        sampler: Any,
     ) -> None:
         self.study_name = str(study_name)
         self.storage = storage
@@ -68,10 +68,8 @@ class TuningSweeper(Sweeper):
         self.parallel_trials = int(parallel_trials)
         self.params = _plain(params) or {}
         self.draws = _plain(draws) or {}
-        self.objective_cfg = OmegaConf.create(_plain(objective) or {})
-        self.sampler_cfg = OmegaConf.create(
-            _plain(sampler) or {"name": "tpe", "seed": 0, "n_startup_trials": 8}
-        )
+        self.objective_cfg = OmegaConf.create(_plain(objective))
+        self.sampler_cfg = OmegaConf.create(_plain(sampler))
         self.hydra_context: Any = None
         self.config: DictConfig | None = None
         self.launcher: Any = None
@@ -109,19 +107,19 @@ class TuningSweeper(Sweeper):
                 f"hydra.sweeper.n_trials ({self.n_trials}) and hydra.sweeper.parallel_trials "
                 f"({self.parallel_trials}) must be at least 1"
             )
-        objective = objectives.get(str(self.objective_cfg.get("name", "mean_force")))
+        objective = objectives.get(str(self.objective_cfg.name))
         keys, notes = objectives.resolve_metrics(objective, self.objective_cfg)
         tuned, fixed = space.parse_space(self.params, arguments)
         draws = space.expand_draws(self.draws, tuned)
-        if str(self.sampler_cfg.get("name")) == "grid" and self.n_trials > studies.grid_size(tuned):
+        if str(self.sampler_cfg.name) == "grid" and self.n_trials > studies.grid_size(tuned):
             notes.append(f"sampler grid: {studies.grid_size(tuned)} points, so at most that many trials")
             self.n_trials = studies.grid_size(tuned)
         self._validate(fixed, tuned, draws)
         definition = {
             "objective": objective.name,
             "metrics": keys,
-            "require_docking": bool(self.objective_cfg.get("require_docking", True)),
-            "penalty": float(self.objective_cfg.get("penalty", 1000.0)),
+            "require_docking": bool(self.objective_cfg.require_docking),
+            "penalty": float(self.objective_cfg.penalty),
             "draws": draws,
             # the order on the command line does not matter, nor does tracking (+tracking=mlflow)
             "fixed": sorted(f for f in fixed if f.lstrip("+").split("=", 1)[0] not in NOT_DEFINING),

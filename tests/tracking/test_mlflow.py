@@ -95,7 +95,7 @@ def job_dir(tmp_path):
 
 def test_a_single_run_is_a_run_of_its_own(tmp_path, store, capsys):
     job, config, cfg = job_dir(tmp_path)
-    callback = MlflowCallback(tracking_uri=store)
+    callback = MlflowCallback("compliant-docking", tracking_uri=store, artifacts=True, timeseries=False)
     callback.on_run_start(config)
     callback.on_job_end(config, job_return=None)
     assert "mlflow: run " in capsys.readouterr().out
@@ -115,7 +115,9 @@ def test_a_single_run_is_a_run_of_its_own(tmp_path, store, capsys):
 def test_tracking_that_cannot_log_says_so_and_never_fails_the_job(tmp_path, monkeypatch, capsys):
     job, config, _ = job_dir(tmp_path)
     monkeypatch.setitem(sys.modules, "mlflow.tracking", None)  # as if MLflow were not installed
-    callback = MlflowCallback(tracking_uri=(tmp_path / "mlruns").as_uri())
+    callback = MlflowCallback(
+        "x", tracking_uri=(tmp_path / "mlruns").as_uri(), artifacts=True, timeseries=False
+    )
     callback.on_run_start(config)
     callback.on_job_end(config, job_return=None)  # does not raise
     out = capsys.readouterr().out

@@ -69,6 +69,7 @@ def make_sweeper(
     node = cfg.hydra.sweeper
     sweeper = TuningSweeper(
         study_name=str(node.study_name),
+        storage=None,
         n_trials=n_trials,
         parallel_trials=2,
         params={"controller.k": "interval(100, 1000)", "controller.d": "interval(30, 300)"},
