@@ -102,6 +102,10 @@ class TuningSweeper(Sweeper):
         """Everything the loop needs, checked before any job runs; prints the header."""
         from compliant_docking.run.rundir import MULTIRUN_FILE
 
+        try:
+            import optuna  # noqa: F401
+        except ImportError:
+            raise ValueError("hydra/sweeper=optuna needs Optuna: pip install -e '.[tune]'") from None
         if self.n_trials < 1 or self.parallel_trials < 1:
             raise ValueError(
                 f"hydra.sweeper.n_trials ({self.n_trials}) and hydra.sweeper.parallel_trials "
