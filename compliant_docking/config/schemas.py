@@ -30,6 +30,7 @@ from compliant_docking.config.geometry import (
     PlugGeometry,
     SocketGeometry,
 )
+from compliant_docking.config.keyed import KeyedPlugGeometry, KeyedSocketGeometry
 
 
 # --------------------------------------------------------------------------- robot
@@ -78,6 +79,20 @@ class TargetConfig:
     quat: List[float] = MISSING  # wxyz
     geometry: SocketGeometry = MISSING
     contact: ContactParams = MISSING
+
+
+@dataclass
+class KeyedToolConfig(ToolConfig):
+    """``tool=keyed_plug``: the polygonal plug (compliant_docking/sim/geometry/keyed.py)."""
+
+    geometry: KeyedPlugGeometry = MISSING  # type: ignore[assignment]
+
+
+@dataclass
+class KeyedTargetConfig(TargetConfig):
+    """``target=keyed_socket``: the polygonal socket (compliant_docking/sim/geometry/keyed.py)."""
+
+    geometry: KeyedSocketGeometry = MISSING  # type: ignore[assignment]
 
 
 @dataclass
@@ -258,6 +273,9 @@ class DockingGateConfig:
     lateral_tolerance_m: float = MISSING  # tip within this of the socket axis
     tilt_tolerance_deg: float = MISSING  # plug axis within this of the socket axis
     peak_force_budget_N: float = MISSING  # peak axial contact force allowed over the run
+    # keyed interfaces: the plug's roll within this of the socket's key; null: the key's
+    # yaw play + 0.1 deg (a seated plug cannot turn further), unchecked if it declares none
+    key_yaw_tolerance_deg: Optional[float] = MISSING
 
 
 @dataclass
@@ -359,8 +377,8 @@ class RenderConfig:
 @dataclass
 class Config:
     robot: RobotConfig = MISSING
-    tool: ToolConfig = MISSING
-    target: Any = MISSING  # TargetConfig or NoTargetConfig
+    tool: Any = MISSING  # ToolConfig or KeyedToolConfig (their geometry schemas differ)
+    target: Any = MISSING  # TargetConfig, KeyedTargetConfig or NoTargetConfig
     physics: PhysicsConfig = MISSING
     controller: Any = MISSING  # one of the controller schemas
     trajectory: Any = MISSING  # one of the planner schemas

@@ -13,11 +13,14 @@ from omegaconf import DictConfig
 
 from compliant_docking import CONF_DIR
 from compliant_docking.config.geometry import ContactParams, PlugGeometry, SocketGeometry
+from compliant_docking.config.keyed import KeyedPlugGeometry, KeyedSocketGeometry
 from compliant_docking.config.schemas import (
     Config,
     HoldConfig,
     HQPConfig,
     ImpedanceConfig,
+    KeyedTargetConfig,
+    KeyedToolConfig,
     NoRenderConfig,
     NoTargetConfig,
     PhysicsConfig,
@@ -36,8 +39,8 @@ from compliant_docking.config.tuning import TuningSweeperConfig
 
 _SCHEMAS: dict[str, dict[str, type]] = {
     "robot": {"robot": RobotConfig},
-    "tool": {"tool": ToolConfig},
-    "target": {"socket": TargetConfig, "none": NoTargetConfig},
+    "tool": {"tool": ToolConfig, "keyed": KeyedToolConfig},
+    "target": {"socket": TargetConfig, "keyed": KeyedTargetConfig, "none": NoTargetConfig},
     "physics": {"physics": PhysicsConfig},
     "controller": {"impedance": ImpedanceConfig, "hqp": HQPConfig, "se3_lie": SE3LieConfig},
     "trajectory": {
@@ -88,6 +91,20 @@ def default_interface() -> tuple[PlugGeometry, SocketGeometry, ContactParams]:
     from omegaconf import OmegaConf
 
     cfg = load_config()
+    return (
+        OmegaConf.to_object(cfg.tool.geometry),
+        OmegaConf.to_object(cfg.target.geometry),  # type: ignore[return-value]
+        OmegaConf.to_object(cfg.target.contact),
+    )
+
+
+def default_keyed(*overrides: str) -> tuple[KeyedPlugGeometry, KeyedSocketGeometry, ContactParams]:
+    """The keyed plug, socket and contact parameters as conf/tool/keyed_plug.yaml and
+    conf/target/keyed_socket.yaml set them, with ``overrides`` (e.g.
+    ``"tool.geometry.sides=6"``: the socket follows the plug's sides and inradius)."""
+    from omegaconf import OmegaConf
+
+    cfg = load_config("tool=keyed_plug", "target=keyed_socket", *overrides)
     return (
         OmegaConf.to_object(cfg.tool.geometry),
         OmegaConf.to_object(cfg.target.geometry),  # type: ignore[return-value]

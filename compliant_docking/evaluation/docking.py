@@ -21,6 +21,7 @@ import pandas as pd
 import pinocchio as pin
 
 from compliant_docking.evaluation.registry import DOCKING_KEYS, finite_or_none
+from compliant_docking.sim.geometry.fragment import ROUND, Key
 from compliant_docking.sim.telemetry import (
     FORCE,
     ORI_ERROR,
@@ -122,10 +123,18 @@ class SeatState:
     lateral_error_m: float | None  # distance of the tip from the socket axis
     tilt_deg: float | None  # angle between plug axis and socket axis
     seated_time_s: float | None  # first time the tip came within depth tolerance of the seat
+    key_yaw_deg: float | None = None  # roll error against the socket's key (None: round interface)
 
 
-def seat_state(ts: pd.DataFrame, seat: pin.SE3, steady_window: float, depth_tolerance: float) -> SeatState:
-    """Where the plug ended up, measured on the physics' (true) socket pose."""
+#: added to a key's yaw play to make the default key-yaw tolerance of the gate [deg]
+KEY_YAW_MARGIN_DEG = 0.1
+
+
+def seat_state(
+    ts: pd.DataFrame, seat: pin.SE3, steady_window: float, depth_tolerance: float, key: Key = ROUND
+) -> SeatState:
+    """Where the plug ended up, measured on the physics' (true) socket pose; for a keyed
+    interface also the roll error against the socket's key (:meth:`Key.yaw_error_deg`)."""
     if ts.empty:
         return SeatState(None, None, None, None)
     t = ts["t"].to_numpy()
@@ -144,6 +153,38 @@ def seat_state(ts: pd.DataFrame, seat: pin.SE3, steady_window: float, depth_tole
         lateral_error_m=finite_or_none(lateral[steady].max()),
         tilt_deg=finite_or_none(tilt[steady].max()),
         seated_time_s=float(t[seated[0]]) if seated.size else None,
+        key_yaw_deg=_key_yaw(quat[steady], seat.rotation, key),
+    )
+
+
+def _key_yaw(quat_wxyz: np.ndarray, seat: np.ndarray, key: Key) -> float | None:
+    if not key.keyed or not len(quat_wxyz):
+        return None
+    return finite_or_none(key.yaw_error_deg(seat, _quat_matrices(quat_wxyz)).max())
+
+
+def key_yaw_limit(gate, key: Key) -> float | None:
+    """The gate's key-yaw tolerance [deg]: ``gate.key_yaw_tolerance_deg`` if set, else the
+    key's yaw play + :data:`KEY_YAW_MARGIN_DEG` (a seated plug cannot turn further), else
+    None (not checked: a round interface, or a key that declares no play)."""
+    if not key.keyed:
+        return None
+    tolerance = getattr(gate, "key_yaw_tolerance_deg", None)
+    if tolerance is not None:
+        return float(tolerance)
+    return None if key.yaw_play_deg is None else key.yaw_play_deg + KEY_YAW_MARGIN_DEG
+
+
+def _quat_matrices(quat_wxyz: np.ndarray) -> np.ndarray:
+    """(n, 3, 3) rotation matrices of unit wxyz quaternions."""
+    w, x, y, z = np.asarray(quat_wxyz, dtype=float).T
+    return np.stack(
+        [
+            np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], axis=-1),
+            np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], axis=-1),
+            np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], axis=-1),
+        ],
+        axis=-2,
     )
 
 
@@ -153,8 +194,13 @@ def _quat_z_axis(quat_wxyz: np.ndarray) -> np.ndarray:
     return np.stack([2 * (x * z + w * y), 2 * (y * z - w * x), 1 - 2 * (x * x + y * y)], axis=1)
 
 
-def docking_gate(seat: SeatState, metrics: DockingMetrics, gate) -> list[str]:
-    """Failing items of the docking gate (empty: success). Missing or non-finite values fail."""
+def docking_gate(
+    seat: SeatState, metrics: DockingMetrics, gate, key_yaw_limit_deg: float | None = None
+) -> list[str]:
+    """Failing items of the docking gate (empty: success). Missing or non-finite values fail.
+
+    ``key_yaw_limit_deg`` (:func:`key_yaw_limit`): also check the roll against the key.
+    """
     checks = [
         ("seat depth error", seat.depth_error_m, gate.depth_tolerance_m, "m"),
         ("seat lateral error", seat.lateral_error_m, gate.lateral_tolerance_m, "m"),
@@ -167,4 +213,12 @@ def docking_gate(seat: SeatState, metrics: DockingMetrics, gate) -> list[str]:
             failures.append(f"{label} not available (non-finite or no data)")
         elif value > limit:
             failures.append(f"{label} {value:.4g} {unit} > {limit:g} {unit}")
+    if key_yaw_limit_deg is not None:
+        if seat.key_yaw_deg is None:
+            failures.append("key yaw not available (non-finite or no data)")
+        elif seat.key_yaw_deg > key_yaw_limit_deg:
+            failures.append(
+                f"key yaw {seat.key_yaw_deg:.4g} deg > {key_yaw_limit_deg:.3g} deg: the plug's key "
+                "is not lined up with the socket's, so it cannot enter the bore"
+            )
     return failures

@@ -95,6 +95,7 @@ METRICS: tuple[Metric, ...] = (
     Metric("seat_depth_error_m", SEAT, "depth error", "mm", 1e3),
     Metric("seat_lateral_error_m", SEAT, "lateral error", "mm", 1e3),
     Metric("seat_tilt_deg", SEAT, "tilt", "deg"),
+    Metric("seat_key_yaw_deg", SEAT, "key yaw", "deg"),  # keyed interfaces only (else null)
     Metric("seated_time_s", SEAT, "seated at", "s", spec=".2f", compared=False),
     # the run
     Metric("sim_time_s", RUN, "simulated", "s", spec=".2f", compared=False),

@@ -122,16 +122,24 @@ def evaluate(sim, out_dir: Path, *, figures: bool) -> dict:
     gated = True
     complete = sim.complete
     if sim.scene.socket is not None:
+        key = sim.scene.key
         seat = M.seat_state(
-            ts, sim.scene.socket.true, float(cfg.task.steady_window), float(cfg.task.gate.depth_tolerance_m)
+            ts,
+            sim.scene.socket.true,
+            float(cfg.task.steady_window),
+            float(cfg.task.gate.depth_tolerance_m),
+            key,
         )
         result.update(
             seat_depth_error_m=seat.depth_error_m,
             seat_lateral_error_m=seat.lateral_error_m,
             seat_tilt_deg=seat.tilt_deg,
+            seat_key_yaw_deg=seat.key_yaw_deg,
             seated_time_s=seat.seated_time_s,
+            key_symmetry=key.symmetry,
+            key_yaw_play_deg=key.yaw_play_deg,
         )
-        failures = M.docking_gate(seat, docking, cfg.task.gate)
+        failures = M.docking_gate(seat, docking, cfg.task.gate, M.key_yaw_limit(cfg.task.gate, key))
     elif isinstance(sim.planner, TrackingPlanner):
         from compliant_docking.evaluation.tracking_gate import tracking_gate
 

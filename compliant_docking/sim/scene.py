@@ -15,11 +15,15 @@ The recipe follows the seed's ``Scene.build_mjmodel``:
 Fragments: a root body named ``dock``; the tool must also carry a site ``sensor_site``
 and may carry a site ``tcp`` (the controlled point, default the ``dock`` origin). The
 tool must be rigid (no joints): its inertia is appended to Pinocchio's flange body.
+Either fragment may declare a key (custom numerics, :mod:`compliant_docking.sim.geometry.
+fragment`); the scene's :attr:`Scene.key` combines both. docs/interfaces.md has the rest.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import mujoco
 import numpy as np
@@ -27,8 +31,11 @@ import pinocchio as pin
 from omegaconf import DictConfig, OmegaConf
 
 from compliant_docking import resolve_path
-from compliant_docking.config.geometry import check_fit
+from compliant_docking.config.geometry import PlugGeometry, SocketGeometry, check_fit
+from compliant_docking.config.keyed import KeyedPlugGeometry, KeyedSocketGeometry, check_keyed_fit
 from compliant_docking.sim.geometry import build_plug, build_socket
+from compliant_docking.sim.geometry.fragment import Key, read_key
+from compliant_docking.sim.geometry.keyed import build_keyed_plug, build_keyed_socket
 from compliant_docking.sim.misalignment import Misalignment, draw
 from compliant_docking.sim.models import ArmModel, RigidTool, mount_placement
 
@@ -56,6 +63,7 @@ class Scene:
     sensor_site: int  # MuJoCo id of the tool's sensor site
     tcp_site: int  # MuJoCo id of the TCP site
     gravity: np.ndarray
+    key: Key = Key()  # the interface's key (symmetry 0: round, any roll mates)
 
 
 def _fragment_error(kind: str, source: str, problem: str) -> ValueError:
@@ -71,8 +79,25 @@ def _fragment_error(kind: str, source: str, problem: str) -> ValueError:
     )
 
 
-def _load_fragment(kind: str, node: DictConfig, contact: DictConfig | None) -> tuple[mujoco.MjSpec, str]:
-    """The fragment's spec: from ``node.mjcf`` if set, else generated from its geometry.
+#: the parametric parts: geometry schema → (option name, builder)
+_PARAMETRIC_TOOLS: dict[type, tuple[str, Callable[..., mujoco.MjSpec]]] = {
+    PlugGeometry: ("cone_plug", build_plug),
+    KeyedPlugGeometry: ("keyed_plug", build_keyed_plug),
+}
+_PARAMETRIC_TARGETS: dict[type, tuple[str, Callable[..., mujoco.MjSpec]]] = {
+    SocketGeometry: ("cone_socket", build_socket),
+    KeyedSocketGeometry: ("keyed_socket", build_keyed_socket),
+}
+#: parametric pairs that fit each other, with their fit check
+_PAIRS: dict[tuple[type, type], Callable[[Any, Any], None]] = {
+    (PlugGeometry, SocketGeometry): check_fit,
+    (KeyedPlugGeometry, KeyedSocketGeometry): check_keyed_fit,
+}
+
+
+def _load_fragment(kind: str, node: DictConfig, contact: DictConfig | None) -> tuple[mujoco.MjSpec, str, Key]:
+    """The fragment's spec, a description of its source and its key: from ``node.mjcf``
+    if set, else generated from its geometry.
 
     ``contact``: the contact parameters of the scene's plug/socket pair (the target's;
     None in free space, where the plug's geoms keep MuJoCo's defaults).
@@ -90,15 +115,33 @@ def _load_fragment(kind: str, node: DictConfig, contact: DictConfig | None) -> t
         geom = OmegaConf.to_object(node.geometry)
         if kind == "tool":
             params = None if contact is None else OmegaConf.to_object(contact)
-            spec = build_plug(geom, params)  # type: ignore[arg-type]  # a PlugGeometry: its schema
+            spec = _PARAMETRIC_TOOLS[type(geom)][1](geom, params)
         else:
-            spec = build_socket(geom, OmegaConf.to_object(node.contact))  # type: ignore[arg-type]
+            spec = _PARAMETRIC_TARGETS[type(geom)][1](geom, OmegaConf.to_object(node.contact))
         source = f"{kind}={node.name} (parametric)"
     if spec.body("dock") is None:
         raise _fragment_error(kind, source, "no body named 'dock'")
     if kind == "tool" and spec.site("sensor_site") is None:
         raise _fragment_error(kind, source, "no site named 'sensor_site'")
-    return spec, source
+    return spec, source, read_key(spec, source)
+
+
+def _check_pair(cfg: DictConfig) -> None:
+    """Two parametric parts must be a pair that fits (a fragment file is the user's call)."""
+    if cfg.tool.mjcf or cfg.target.mjcf:
+        return
+    tool_type = OmegaConf.get_type(cfg.tool, "geometry")
+    target_type = OmegaConf.get_type(cfg.target, "geometry")
+    check = _PAIRS.get((tool_type, target_type))  # type: ignore[arg-type]  # get_type: type | None
+    if check is None:
+        pairs = ", ".join(
+            f"tool={_PARAMETRIC_TOOLS[a][0]} target={_PARAMETRIC_TARGETS[b][0]}" for a, b in _PAIRS
+        )
+        raise ValueError(
+            f"tool={cfg.tool.name} and target={cfg.target.name} are not a mating pair: use "
+            f"{pairs}, or a fragment file via tool.mjcf / target.mjcf (docs/interfaces.md)"
+        )
+    check(OmegaConf.to_object(cfg.tool.geometry), OmegaConf.to_object(cfg.target.geometry))
 
 
 def rigid_tool(spec: mujoco.MjSpec, source: str) -> RigidTool:
@@ -224,9 +267,9 @@ def build_scene(cfg: DictConfig) -> Scene:
     # Tool: its mass properties first (from a standalone copy), then attach it posed
     # relative to the flange site: attach interprets the body pose in the site frame.
     contact = cfg.target.get("contact")  # the pair's contact parameters; None in free space
-    tool_spec, source = _load_fragment("tool", cfg.tool, contact)
+    tool_spec, source, key = _load_fragment("tool", cfg.tool, contact)
     tool = rigid_tool(tool_spec, source)
-    tool_spec, _ = _load_fragment("tool", cfg.tool, contact)
+    tool_spec, _, _ = _load_fragment("tool", cfg.tool, contact)
     mount = mount_placement(cfg.tool.mount_pos, cfg.tool.mount_quat)
     tool_root = tool_spec.body("dock")
     tool_root.pos = mount.translation.tolist()
@@ -238,9 +281,9 @@ def build_scene(cfg: DictConfig) -> Scene:
 
     socket = socket_pose(cfg)
     if socket is not None:
-        if not cfg.tool.mjcf and not cfg.target.mjcf:
-            check_fit(OmegaConf.to_object(cfg.tool.geometry), OmegaConf.to_object(cfg.target.geometry))  # type: ignore[arg-type]
-        target_spec, _ = _load_fragment("target", cfg.target, contact)
+        _check_pair(cfg)
+        target_spec, _, target_key = _load_fragment("target", cfg.target, contact)
+        key = key.combine(target_key)
         quat = pin.Quaternion(socket.true.rotation).coeffs()[[3, 0, 1, 2]]
         frame = arm_spec.worldbody.add_frame(
             name="target_frame", pos=socket.true.translation.tolist(), quat=quat.tolist()
@@ -282,4 +325,5 @@ def build_scene(cfg: DictConfig) -> Scene:
         sensor_site=model.site(sensor_site).id,
         tcp_site=model.site(tcp_name).id,
         gravity=gravity,
+        key=key if socket is not None else Key(),
     )

@@ -7,15 +7,18 @@ import pinocchio as pin
 from omegaconf import DictConfig
 
 from compliant_docking.planning.base import Planner, Waypoints
+from compliant_docking.sim.geometry.fragment import MATED
 from compliant_docking.sim.scene import Scene
 
 
 def task_waypoints(cfg: DictConfig, scene: Scene) -> Waypoints:
     """Start and goal TCP poses and the docking axis, from the socket pose the planner believes.
 
-    Without ``task.init_quat`` the plug points along the socket axis into the socket;
-    its roll about that axis (free: the interface is axisymmetric) is the roll of the TCP
-    at ``robot.ik_guess``, so the start posture needs no wrist turn.
+    Without ``task.init_quat`` the plug points along the socket axis into the socket.
+    Its roll about that axis: for a round interface (``scene.key.symmetry`` 0) the roll
+    of the TCP at ``robot.ik_guess``, so the start posture needs no wrist turn; for a
+    keyed one, the mating roll (tcp x along the believed seat's x, turned by a multiple
+    of 360°/symmetry; :mod:`compliant_docking.sim.geometry.fragment`) nearest to it.
     """
     task = cfg.task
     stroke = np.asarray(task.stroke, dtype=float)
@@ -43,12 +46,27 @@ def task_waypoints(cfg: DictConfig, scene: Scene) -> Waypoints:
         start_pos = seat.translation - stroke
     else:
         start_pos = np.asarray(task.init_pos, dtype=float)
-    rot = (
-        _with_axis(guess, -seat.rotation[:, 2])
-        if task.init_quat is None
-        else _quat_matrix(task.init_quat, "task.init_quat")
-    )
+    if task.init_quat is not None:
+        rot = _quat_matrix(task.init_quat, "task.init_quat")
+    elif scene.key.keyed:
+        rot = keyed_rotation(seat.rotation, scene.key.symmetry, guess)
+    else:
+        rot = _with_axis(guess, -seat.rotation[:, 2])
     return Waypoints(start=pin.SE3(rot, start_pos), goal=pin.SE3(rot, start_pos + stroke), axis=axis)
+
+
+def keyed_rotation(seat: np.ndarray, symmetry: int, near: np.ndarray) -> np.ndarray:
+    """The mated tcp orientation (world) for a seat orientation ``seat`` and a key of
+    ``symmetry``: seat · Rx(180°) · Rz(360°·k/symmetry), the k nearest to ``near``."""
+    best, best_angle = seat, np.inf
+    for k in range(symmetry):
+        phi = 2.0 * np.pi * k / symmetry
+        c, s = np.cos(phi), np.sin(phi)
+        rot = seat @ MATED @ np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+        angle = np.arccos(np.clip((np.trace(rot.T @ near) - 1.0) / 2.0, -1.0, 1.0))
+        if angle < best_angle:
+            best, best_angle = rot, angle
+    return best
 
 
 def _with_axis(rot: np.ndarray, z_axis: np.ndarray) -> np.ndarray:

@@ -16,7 +16,7 @@ from hydra.utils import get_class
 from omegaconf import MISSING, OmegaConf
 
 from compliant_docking import CONF_DIR
-from compliant_docking.config import geometry, schemas, tuning
+from compliant_docking.config import geometry, keyed, schemas, tuning
 from compliant_docking.config.store import _SCHEMAS
 from tests.helpers import make_cfg
 
@@ -33,7 +33,9 @@ def _dataclasses(module) -> list[type]:
 
 
 @pytest.mark.parametrize(
-    "cls", _dataclasses(schemas) + _dataclasses(geometry) + _dataclasses(tuning), ids=lambda c: c.__name__
+    "cls",
+    _dataclasses(schemas) + _dataclasses(geometry) + _dataclasses(keyed) + _dataclasses(tuning),
+    ids=lambda c: c.__name__,
 )
 def test_schemas_carry_no_values(cls):
     valued = [
@@ -48,9 +50,14 @@ def _options() -> list[tuple[str, str]]:
     return [(group, path.stem) for group in _SCHEMAS for path in sorted((CONF_DIR / group).glob("*.yaml"))]
 
 
+#: options whose values interpolate another group's option (the keyed socket follows the
+#: keyed plug's sides and inradius): composed with it
+PAIRED = {("target", "keyed_socket"): ("tool=keyed_plug",)}
+
+
 @pytest.mark.parametrize(("group", "option"), _options())
 def test_every_option_sets_every_field_of_its_schema(group, option):
-    cfg = make_cfg(f"{group}={option}")
+    cfg = make_cfg(f"{group}={option}", *PAIRED.get((group, option), ()))
     missing = sorted(OmegaConf.missing_keys(cfg[group]))
     assert not missing, f"conf/{group}/{option}.yaml leaves {missing} unset"
 

@@ -1,9 +1,11 @@
-"""The parametric docking interface as MuJoCo fragments: the plug (:mod:`.plug`) and the
-socket (:mod:`.socket`), with the collision filtering they share (:mod:`.collision`).
+"""The docking interfaces as MuJoCo fragments: the round pair, plug (:mod:`.plug`) and
+socket (:mod:`.socket`); the keyed pair (:mod:`.keyed`); the collision filtering they share
+(:mod:`.collision`) and what a fragment declares about its key (:mod:`.fragment`).
 
 Their parameters (:class:`~compliant_docking.config.geometry.PlugGeometry`,
-``SocketGeometry``, ``ContactParams``) live in the config layer, since they are the
-typed schemas of ``tool.geometry``, ``target.geometry`` and ``target.contact``.
+``SocketGeometry``, ``ContactParams``, :mod:`compliant_docking.config.keyed`) live in the
+config layer, since they are the typed schemas of ``tool.geometry``, ``target.geometry``
+and ``target.contact``. docs/interfaces.md describes fragments and their frames.
 """
 
 from compliant_docking.sim.geometry.plug import (

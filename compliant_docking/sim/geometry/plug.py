@@ -58,25 +58,40 @@ def plug_inertia(geom: PlugGeometry) -> tuple[float, np.ndarray, np.ndarray]:
     The plug is a uniform solid (cylinder plus conical chamfer) scaled to
     ``geom.mass``.  The centre of mass lies on the axis, in the ``dock`` frame; the
     inertia is about the centre of mass along the ``dock`` axes (x, y, z), which are
-    principal because the plug is axisymmetric.  The integrals are exact: Gauss-
-    Legendre quadrature of polynomial integrands.
+    principal because the plug is axisymmetric.  See :func:`stacked_inertia`.
+    """
+    return stacked_inertia(_plug_profile(geom), math.pi, 0.5 * math.pi, geom.mass)
+
+
+def stacked_inertia(
+    profile: list[tuple[float, float, float, float]], area_coeff: float, polar_coeff: float, mass: float
+) -> tuple[float, np.ndarray, np.ndarray]:
+    """Mass, centre of mass and principal inertia of a uniform solid stacked along z.
+
+    ``profile``: (z0, z1, rho0, rho1) segments in which the section's size rho varies
+    linearly with z; each section is a similar shape of area ``area_coeff * rho**2``
+    and polar moment about the axis ``polar_coeff * rho**4`` (a disc of radius rho:
+    pi and pi/2; a regular n-gon of inradius rho: n*tan(pi/n) and
+    n*(tan(pi/n)/2 + tan(pi/n)**3/6)).  The sections must be isotropic in their plane
+    (discs, regular polygons), so x, y and z are principal axes.  The integrals are
+    exact: 4-point Gauss-Legendre quadrature of polynomials of degree <= 4 per segment.
     """
     nodes, weights = np.polynomial.legendre.leggauss(4)
-    volume = first_moment = second_moment = radial_moment = 0.0
-    for z0, z1, rho0, rho1 in _plug_profile(geom):
+    volume = first_moment = second_moment = polar_moment = 0.0
+    for z0, z1, rho0, rho1 in profile:
         half = 0.5 * (z1 - z0)
         z = z0 + half * (nodes + 1.0)
         rho = rho0 + (rho1 - rho0) * (z - z0) / (z1 - z0)
-        slab = weights * half * math.pi * rho**2  # volume of each slice
+        slab = weights * half * area_coeff * rho**2  # volume of each slice
         volume += float(np.sum(slab))
         first_moment += float(np.sum(slab * z))
         second_moment += float(np.sum(slab * z**2))
-        radial_moment += float(np.sum(slab * rho**2))
-    density = geom.mass / volume
+        polar_moment += float(np.sum(weights * half * polar_coeff * rho**4))
+    density = mass / volume
     z_com = first_moment / volume
-    axial = 0.5 * density * radial_moment  # sum of disc inertias m rho^2 / 2
-    transverse = density * (0.25 * radial_moment + second_moment - volume * z_com**2)
-    return geom.mass, np.array([0.0, 0.0, z_com]), np.array([transverse, transverse, axial])
+    axial = density * polar_moment
+    transverse = density * (0.5 * polar_moment + second_moment - volume * z_com**2)
+    return mass, np.array([0.0, 0.0, z_com]), np.array([transverse, transverse, axial])
 
 
 def _ring(radius: float, z: float, segments: int) -> np.ndarray:

@@ -78,12 +78,39 @@ def socket_boxes(geom: SocketGeometry) -> list[Box]:
     azimuth, from the bore/funnel circle up to the mouth.  Face half-widths cover the
     polygon edges (each face reaches its neighbours' planes), so the walls are closed.
     """
-    n = geom.sectors
-    rb, t, depth = geom.bore_radius, geom.wall_thickness, geom.insertion_depth
-    alpha = math.radians(geom.funnel_angle_deg)
-    generator_length = geom.funnel_depth / math.cos(alpha)
+    return cavity_boxes(
+        geom.sectors,
+        geom.bore_radius,
+        geom.insertion_depth,
+        geom.funnel_angle_deg,
+        geom.funnel_depth,
+        geom.wall_thickness,
+        geom.floor_thickness,
+    )
+
+
+def cavity_boxes(
+    sectors: int,
+    bore_inradius: float,
+    depth: float,
+    funnel_angle_deg: float,
+    funnel_depth: float,
+    wall_thickness: float,
+    floor_thickness: float,
+) -> list[Box]:
+    """Boxes bounding a ``sectors``-gon bore of inradius ``bore_inradius`` (faces at
+    azimuths 2*pi*k/sectors, z from 0 to ``depth``) below a pyramidal funnel whose faces
+    lean out by ``funnel_angle_deg`` up to ``depth + funnel_depth``, and a floor box
+    whose top face is z = 0.  Every box lies behind the plane of its inner face, so the
+    free space is exactly the intersection of those half-spaces (see the module doc).
+    """
+    n = sectors
+    rb, t = bore_inradius, wall_thickness
+    alpha = math.radians(funnel_angle_deg)
+    generator_length = funnel_depth / math.cos(alpha)
+    mouth = rb + funnel_depth * math.tan(alpha)
     half_width_bore = (rb + t) * math.tan(math.pi / n)
-    half_width_funnel = (geom.mouth_radius + t) * math.tan(math.pi / n)
+    half_width_funnel = (mouth + t) * math.tan(math.pi / n)
     up = np.array([0.0, 0.0, 1.0])
     bores, funnels = [], []
     for k in range(n):
@@ -109,12 +136,12 @@ def socket_boxes(geom: SocketGeometry) -> list[Box]:
                 half_size=(0.5 * t, half_width_funnel, 0.5 * generator_length),
             )
         )
-    floor_half = rb + t
+    floor_half = (rb + t) / math.cos(math.pi / n)  # reaches the outer polygon corners
     floor = Box(
         name="floor",
-        pos=(0.0, 0.0, -0.5 * geom.floor_thickness),
+        pos=(0.0, 0.0, -0.5 * floor_thickness),
         quat=(1.0, 0.0, 0.0, 0.0),
-        half_size=(floor_half, floor_half, 0.5 * geom.floor_thickness),
+        half_size=(floor_half, floor_half, 0.5 * floor_thickness),
     )
     return bores + funnels + [floor]
 
@@ -126,10 +153,17 @@ def build_socket(geom: SocketGeometry, contact: ContactParams) -> mujoco.MjSpec:
     :func:`socket_boxes`), drawn semi-transparent.  Sites ``seat`` (origin) and
     ``mouth`` (0, 0, insertion_depth + funnel_depth).
     """
+    return box_socket_spec(socket_boxes(geom), contact, geom.mouth_height)
+
+
+def box_socket_spec(boxes: list[Box], contact: ContactParams, mouth_height: float) -> mujoco.MjSpec:
+    """A socket fragment made of ``boxes`` (names ``bore_*`` meet the plug's shaft, the
+    others its tip), with the sites ``seat`` at the origin and ``mouth`` at
+    (0, 0, mouth_height)."""
     spec = mujoco.MjSpec()
     spec.modelname = "socket"
     body = spec.worldbody.add_body(name="dock")
-    for box in socket_boxes(geom):
+    for box in boxes:
         g = body.add_geom(
             name=box.name,
             type=mujoco.mjtGeom.mjGEOM_BOX,
@@ -145,5 +179,5 @@ def build_socket(geom: SocketGeometry, contact: ContactParams) -> mujoco.MjSpec:
         # the parameters of the geom with the higher priority instead of mixing them).
         g.priority = SOCKET_PRIORITY
     body.add_site(name="seat", pos=[0.0, 0.0, 0.0])
-    body.add_site(name="mouth", pos=[0.0, 0.0, geom.mouth_height])
+    body.add_site(name="mouth", pos=[0.0, 0.0, mouth_height])
     return spec
