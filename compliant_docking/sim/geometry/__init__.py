@@ -1,6 +1,9 @@
 """The docking interfaces as MuJoCo fragments: the round pair, plug (:mod:`.plug`) and
 socket (:mod:`.socket`); the keyed pair (:mod:`.keyed`); the collision filtering they share
-(:mod:`.collision`) and what a fragment declares about its key (:mod:`.fragment`).
+(:mod:`.collision`) and what a fragment declares about its key (:mod:`.fragment`). A
+user's interface from CAD (:mod:`.cad`, ``python -m compliant_docking.interface``): mesh
+files (:mod:`.mesh`) → convex pieces (:mod:`.convex`, CoACD) → a clearance check
+(:mod:`.clearance`) → fragments.
 
 Their parameters (:class:`~compliant_docking.config.geometry.PlugGeometry`,
 ``SocketGeometry``, ``ContactParams``, :mod:`compliant_docking.config.keyed`) live in the
