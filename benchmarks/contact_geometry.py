@@ -117,7 +117,28 @@ def build_rig(
     plug_collision: str = "cylinder_tip",
     compliance: Compliance = Compliance(),
 ) -> Rig:
-    """Compile the insertion rig for ``case``.
+    """Compile the insertion rig for ``case`` with the parametric plug and socket
+    (:func:`rig_from_fragments`)."""
+    return rig_from_fragments(
+        build_plug(plug, contact, collision=plug_collision),
+        build_socket(socket, contact),
+        plug.length,
+        socket.mouth_height,
+        case,
+        compliance=compliance,
+    )
+
+
+def rig_from_fragments(
+    plug: mujoco.MjSpec,
+    socket: mujoco.MjSpec,
+    plug_length: float,
+    mouth_height: float,
+    case: Case,
+    *,
+    compliance: Compliance = Compliance(),
+) -> Rig:
+    """Compile the insertion rig for ``case`` from a tool and a target fragment.
 
     World frame = socket frame.  The plug tip starts ``START_GAP`` above the mouth and
     ``case.offset`` along +x from the axis, the plug axis tilted by ``case.tilt_deg``
@@ -130,14 +151,14 @@ def build_rig(
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
     spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
     spec.option.gravity = [0.0, 0.0, 0.0]
-    spec.worldbody.add_frame().attach_body(build_socket(socket, contact).body("dock"), prefix="target_")
+    spec.worldbody.add_frame().attach_body(socket.body("dock"), prefix="target_")
 
     quat = _plug_orientation(case.tilt_deg)
     rot = np.zeros(9)
     mujoco.mju_quat2Mat(rot, quat)
     plug_axis = rot.reshape(3, 3)[:, 2]
-    tip = np.array([case.offset, 0.0, socket.mouth_height + START_GAP])
-    carrier = spec.worldbody.add_body(name="carrier", pos=(tip - plug.length * plug_axis).tolist())
+    tip = np.array([case.offset, 0.0, mouth_height + START_GAP])
+    carrier = spec.worldbody.add_body(name="carrier", pos=(tip - plug_length * plug_axis).tolist())
     carrier.explicitinertial = True
     carrier.mass = 1e-3
     carrier.inertia = [1e-8, 1e-8, 1e-8]
@@ -164,7 +185,7 @@ def build_rig(
             damping=[c.rotational_damping, 0.0, 0.0],
         )
     mount = carrier.add_site(name="attachment_site", quat=quat.tolist())
-    mount.attach_body(build_plug(plug, contact, collision=plug_collision).body("dock"), prefix="tool_")
+    mount.attach_body(plug.body("dock"), prefix="tool_")
 
     model = spec.compile()
     data = mujoco.MjData(model)

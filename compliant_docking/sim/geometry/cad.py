@@ -158,7 +158,8 @@ def input_hash(plug: bytes, socket: bytes, options: ConvertOptions) -> str:
     return digest.hexdigest()
 
 
-def _load_mesh(path: Path, data: bytes, scale: float, what: str) -> Mesh:
+def load_mesh(path: Path, data: bytes, scale: float, what: str) -> Mesh:
+    """A closed mesh from a file's bytes (its suffix names the format), scaled to metres."""
     import io
 
     import trimesh
@@ -222,8 +223,8 @@ def convert(
     require_cad_extra()
     started = time.perf_counter()
     scale = UNITS[options.unit]
-    plug = _load_mesh(plug_path, data["plug"], scale, "plug")
-    socket = _load_mesh(socket_path, data["socket"], scale, "socket")
+    plug = load_mesh(plug_path, data["plug"], scale, "plug")
+    socket = load_mesh(socket_path, data["socket"], scale, "socket")
     z_tip, z_top = float(plug[0][:, 2].min()), float(plug[0][:, 2].max())
     if not socket[0][:, 2].min() <= z_tip <= socket[0][:, 2].max():
         raise ValueError(
@@ -272,8 +273,8 @@ def convert(
         key = Key(options.symmetry if play is not None else 0, play)
         if options.symmetry and play is None:
             log("  the plug turns freely in the socket's pieces: the interface is not keyed (key_symmetry 0)")
-    tool, mass = _tool_spec(plug, hulls["plug"], z_tip, z_top, options, key)
-    target = _target_spec(socket, hulls["socket"], z_tip, options, key)
+    tool, mass = tool_fragment(plug, hulls["plug"], z_tip, z_top, options, key)
+    target = target_fragment(socket, hulls["socket"], z_tip, options, key)
     out_dir.mkdir(parents=True, exist_ok=True)
     (out_dir / TOOL_FILE).write_text(tool.to_xml())
     (out_dir / TARGET_FILE).write_text(target.to_xml())
@@ -311,9 +312,10 @@ def _mass_properties(plug: Mesh, options: ConvertOptions) -> tuple[float, np.nda
     return float(mesh.mass), np.asarray(mesh.center_mass), np.asarray(mesh.moment_inertia)
 
 
-def _tool_spec(
+def tool_fragment(
     plug: Mesh, hulls: list[Hull], z_tip: float, z_top: float, options: ConvertOptions, key: Key
 ) -> tuple[mujoco.MjSpec, dict]:
+    """The tool fragment of a plug (CAD frame, mated) and its pieces, and the mass record."""
     top = np.array([0.0, 0.0, z_top])
 
     def to_dock(points: np.ndarray) -> np.ndarray:  # CAD → dock frame: MATED · (p − top)
@@ -354,9 +356,10 @@ def _tool_spec(
     return spec, record
 
 
-def _target_spec(
+def target_fragment(
     socket: Mesh, hulls: list[Hull], z_tip: float, options: ConvertOptions, key: Key
 ) -> mujoco.MjSpec:
+    """The target fragment of a socket (CAD frame, mated; the seat at z_tip) and its pieces."""
     seat = np.array([0.0, 0.0, z_tip])
     spec = mujoco.MjSpec()
     spec.modelname = "cad_socket"
