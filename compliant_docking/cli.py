@@ -39,6 +39,7 @@ class CommandLine:
 
     def task(self, cfg: DictConfig) -> str | None:
         """Hydra's task function: one job into Hydra's output directory."""
+        from compliant_docking.run.figures import wanted
         from compliant_docking.run.runner import execute
 
         hydra_cfg = HydraConfig.get()
@@ -49,9 +50,10 @@ class CommandLine:
                 self.records.append(kept)
                 return resume.SKIPPED
             resume.prepare_rerun(cfg, out_dir)
-        # in a sweep, each job prints one progress line (SweepCallback), not its summary
-        echo = hydra_cfg.mode != RunMode.MULTIRUN
-        self.records.append(execute(cfg, out_dir, figures=bool(cfg.get("figures", True)), echo=echo))
+        # in a sweep, each job prints one progress line (SweepCallback), not its summary,
+        # and draws no figures unless `figures=true` (report --runs draws them later)
+        sweep = hydra_cfg.mode == RunMode.MULTIRUN
+        self.records.append(execute(cfg, out_dir, figures=wanted(cfg, sweep=sweep), echo=not sweep))
         return None
 
     def run(self, argv: list[str]) -> int:

@@ -385,4 +385,6 @@ class Config:
     task: TaskConfig = MISSING
     render: Any = MISSING  # NoRenderConfig or RenderConfig
     viewer: bool = MISSING  # MuJoCo's interactive viewer, paced to real time (one run, a display)
-    figures: bool = MISSING  # the run's figures/ (PNG + PDF); the tuning presets turn them off
+    # per-run figures (figures/): null = a single run draws them, a sweep job does not;
+    # true / false: always / never (`python -m compliant_docking.report PATH --runs` draws them later)
+    figures: Optional[bool] = MISSING

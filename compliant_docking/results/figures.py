@@ -1,4 +1,4 @@
-"""Figures comparing runs (SciencePlots style, PNG + PDF), from a :func:`load_runs` frame.
+"""Figures comparing runs (SciencePlots style, PNG; PDF on request), from a :func:`load_runs` frame.
 
 - :func:`metric_bars`: grouped bars of the Table-10 metrics and the success rate across
   configurations (mean over repeats, whiskers: min to max of the repeats);
@@ -10,12 +10,14 @@
   ``python -m compliant_docking.report`` call).
 
 Every function returns the matplotlib Figure (for a notebook: ``display(fig)``) and,
-given ``out_dir``, also saves it as ``<stem>.png`` and ``<stem>.pdf``.
+given ``out_dir``, also saves it as ``<stem>.png`` (other formats: ``formats``, e.g.
+``("png", "pdf")``; a PDF costs about as much as the PNG).
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -26,7 +28,7 @@ from compliant_docking.evaluation import registry
 from compliant_docking.results.tables import configuration_keys, configuration_labels
 from compliant_docking.run import rundir
 from compliant_docking.sim.telemetry import FORCE, axial_force
-from compliant_docking.viz.plotting import apply_style, envelope
+from compliant_docking.viz.plotting import FORMATS, apply_style, check_formats, envelope
 
 #: metrics drawn by :func:`metric_bars`, by section of the registry (plus success)
 BAR_SECTIONS = (registry.CONTACT, registry.INTERNAL, registry.TRACKING)
@@ -38,15 +40,16 @@ MISALIGNMENT_AXES = (
 )
 
 
-def save_figure(fig, out_dir: str | Path | None, stem: str) -> list[Path]:
-    """Save ``fig`` as ``out_dir/stem.png`` and ``.pdf`` (nothing when out_dir is None)."""
+def save_figure(fig, out_dir: str | Path | None, stem: str, formats: Sequence[str] = FORMATS) -> list[Path]:
+    """Save ``fig`` as ``out_dir/stem.<format>`` for each of ``formats`` (nothing when
+    out_dir is None)."""
     if out_dir is None:
         return []
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     paths = []
-    for suffix in (".png", ".pdf"):
-        path = out / f"{stem}{suffix}"
+    for fmt in check_formats(formats):
+        path = out / f"{stem}.{fmt}"
         fig.savefig(path)
         paths.append(path)
         fig.set_layout_engine("none")  # laid out once, by the first save (text layout is slow)
@@ -328,8 +331,8 @@ def force_overlay(
     return fig
 
 
-def plot_comparison(df: pd.DataFrame, out_dir: str | Path) -> list[Path]:
-    """All comparison figures of ``df`` into ``out_dir`` (PNG + PDF); returns the files."""
+def plot_comparison(df: pd.DataFrame, out_dir: str | Path, formats: Sequence[str] = FORMATS) -> list[Path]:
+    """All comparison figures of ``df`` into ``out_dir`` (PNG, or ``formats``); returns the files."""
     plt = apply_style()
     out = Path(out_dir)
     saved: list[Path] = []
@@ -341,6 +344,6 @@ def plot_comparison(df: pd.DataFrame, out_dir: str | Path) -> list[Path]:
         fig = make(df)
         if fig is None:
             continue
-        saved += save_figure(fig, out, stem)
+        saved += save_figure(fig, out, stem, formats)
         plt.close(fig)
     return saved

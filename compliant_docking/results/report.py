@@ -7,10 +7,13 @@ a sweep directory, a tree of them, or all of ``runs/``. Writes into PATH (or ``-
 - ``comparison.csv``, ``summary.md``: the Table-10 comparison, one column per
   configuration (summary.md also lists every job);
 - ``comparison/``: ``table10_bars``, ``success_vs_misalignment`` (when the
-  misalignment varies), ``force_overlay`` (PNG + PDF).
+  misalignment varies), ``force_overlay`` (PNG; ``--formats png pdf`` for PDF too);
+- with ``--runs``: each run's own ``figures/`` (tracking, errors, contact force,
+  joint torques), from its time series — the figures a sweep job leaves out by
+  default; written in each run directory, whatever ``--out`` says.
 
 and prints summary.md's counts and comparison. Exit status: 0 when at least one
-finished run was found, 2 when none was (or PATH does not exist).
+finished run was found, 2 when none was (or PATH does not exist, or a format is unknown).
 """
 
 from __future__ import annotations
@@ -38,12 +41,31 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--out", type=Path, default=None, help="where to write the tables and comparison/ (default: PATH)"
     )
-    parser.add_argument("--no-figures", action="store_true", help="tables only")
+    parser.add_argument("--no-figures", action="store_true", help="no comparison figures")
+    parser.add_argument(
+        "--runs",
+        action="store_true",
+        help="also draw each run's own figures into its figures/ folder (sweep jobs skip them by default)",
+    )
+    parser.add_argument(
+        "--formats",
+        nargs="+",
+        default=["png"],
+        metavar="FORMAT",
+        help="file formats of the figures: png, pdf, svg (default: png)",
+    )
     args = parser.parse_args(argv)
 
     path = Path(args.path)
     if not path.exists():
         print(f"report: no such directory: {path}", file=sys.stderr)
+        return 2
+    from compliant_docking.viz.plotting import check_formats
+
+    try:
+        formats = check_formats(args.formats)
+    except ValueError as exc:
+        print(f"report: --formats: {exc}", file=sys.stderr)
         return 2
     frame, skipped = scan(path)
     for job_dir in skipped:
@@ -58,9 +80,10 @@ def main(argv: list[str] | None = None) -> int:
 
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", RunSkippedWarning)
-            figures = plot_comparison(frame, out / "comparison")
+            figures = plot_comparison(frame, out / "comparison", formats)
     else:
         figures = []
+    drawn = draw_runs(frame, formats) if args.runs else 0
     text = paths["summary.md"].read_text(encoding="utf-8")
     print(text.split("\n## Jobs", 1)[0].rstrip())
     print(f"\n{counts(frame, len(skipped)).line()}")
@@ -68,7 +91,25 @@ def main(argv: list[str] | None = None) -> int:
         f"wrote {', '.join(p.name for p in paths.values())} to {out}"
         + (f" and {len(figures)} figure files to {out / 'comparison'}" if figures else "")
     )
+    if args.runs:
+        print(f"drew the figures of {drawn} of {len(frame)} runs (into <run>/figures/)")
     return 0
+
+
+def draw_runs(frame, formats) -> int:
+    """Each run's own figures (:func:`compliant_docking.run.figures.redraw`); how many
+    runs got them. A run that cannot be drawn (failed before its time series) is named
+    on stderr and skipped."""
+    from compliant_docking.run.figures import redraw
+
+    drawn = 0
+    for run_dir in frame["run_dir"]:
+        try:
+            redraw(Path(run_dir), formats)
+            drawn += 1
+        except ValueError as exc:
+            print(f"report: no figures for {run_dir}: {exc}", file=sys.stderr)
+    return drawn
 
 
 if __name__ == "__main__":

@@ -27,8 +27,9 @@ of the job's composed config — resolved (interpolations replaced by their valu
 enums by their names), Hydra's own node left out — as canonical JSON (sorted keys, no
 spaces), first 16 hex digits. Left out because they change how a job reports, not what
 it computes (:data:`HASH_EXCLUDED`): ``hydra`` (where and how the job was launched: the
-sweep directory, the launcher, the job number) and ``task.progress`` (the console
-progress line). Everything else counts, ``render`` included (a video adds files and
+sweep directory, the launcher, the job number), ``task.progress`` (the console
+progress line) and ``figures`` (whether the job draws its per-run figures, which
+``python -m compliant_docking.report --runs`` can draw later from the time series). Everything else counts, ``render`` included (a video adds files and
 keys to the run directory). The hash covers the config, not the code: files the config
 names (the robots' MJCF) and the package itself are tracked by ``git_commit``,
 ``git_dirty`` and the versions.
@@ -48,7 +49,7 @@ from importlib import metadata
 from compliant_docking import REPO_ROOT
 
 #: dotted config keys left out of :func:`config_hash` (see the module docstring)
-HASH_EXCLUDED = ("hydra", "task.progress")
+HASH_EXCLUDED = ("hydra", "task.progress", "figures")
 #: hex digits of the SHA-256 kept in ``config_hash`` (64 bits)
 HASH_DIGITS = 16
 #: ``version_<key>`` → the distribution whose installed version it records (None: Python)

@@ -19,6 +19,7 @@ import numpy as np
 from omegaconf import DictConfig, OmegaConf
 
 from compliant_docking.evaluation.registry import DOCKING_KEYS
+from compliant_docking.run import figures as run_figures
 from compliant_docking.run import provenance, rundir
 from compliant_docking.run.summary import display_path, format_summary
 from compliant_docking.sim.misalignment import record_for as misalignment_record
@@ -32,13 +33,17 @@ def _one_line(exc: BaseException) -> str:
     return text if isinstance(exc, (ValueError, RuntimeError)) else f"{type(exc).__name__}: {text}"
 
 
-def execute(cfg: DictConfig, out_dir: Path, *, figures: bool = True, echo: bool = True) -> dict:
+def execute(cfg: DictConfig, out_dir: Path, *, figures: bool | None = None, echo: bool = True) -> dict:
     """Run the job of ``cfg`` into ``out_dir``; returns the metrics record (never raises).
 
     The record starts with the fields naming the job (config choices, overrides).
+    ``figures``: draw the per-run figures; None: as the config's ``figures`` says for a
+    single run (:func:`compliant_docking.run.figures.wanted`).
     """
     from compliant_docking.sim.simulate import Diverged, prepare
 
+    if figures is None:
+        figures = run_figures.wanted(cfg, sweep=False)
     started = time.perf_counter()
     started_at = provenance.now_iso()
     out_dir = Path(out_dir)
@@ -156,14 +161,12 @@ def evaluate(sim, out_dir: Path, *, figures: bool) -> dict:
 
     rundir.write_timeseries(out_dir, ts)
     if figures:
-        from compliant_docking.viz.plotting import plot_run
-
-        title = f"{cfg.robot.name} · {cfg.controller.name} · {cfg.trajectory.name}"
-        rundir.write_figures(
+        run_figures.draw(
             out_dir,
-            lambda folder: plot_run(
-                ts, folder, axis=axis, torque_limits=np.asarray(cfg.robot.max_torque, float), title=title
-            ),
+            ts,
+            axis=axis,
+            torque_limits=np.asarray(cfg.robot.max_torque, float),
+            title=f"{cfg.robot.name} · {cfg.controller.name} · {cfg.trajectory.name}",
         )
     return result
 

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import pandas as pd
 import pytest
+from omegaconf import OmegaConf
 
 from compliant_docking.results import (
     BASE_COLUMNS,
@@ -227,9 +228,36 @@ def test_report_draws_the_comparison_figures(real_run, tmp_path):
     out = tmp_path / "out"
     assert report.main([str(real_run), "--out", str(out)]) == 0
     for stem in ("table10_bars", "force_overlay"):
-        for suffix in (".png", ".pdf"):
-            assert (out / "comparison" / f"{stem}{suffix}").stat().st_size > 1000
+        assert (out / "comparison" / f"{stem}.png").stat().st_size > 1000
+        assert not (out / "comparison" / f"{stem}.pdf").exists()  # PNG unless asked
     assert not (out / "comparison" / "success_vs_misalignment.png").exists()  # nothing varies
+    assert report.main([str(real_run), "--out", str(out), "--formats", "png", "pdf"]) == 0
+    assert (out / "comparison" / "table10_bars.pdf").stat().st_size > 1000
+    assert report.main([str(real_run), "--formats", "gif"]) == 2  # refused, naming the formats
+
+
+def test_report_draws_the_runs_own_figures_on_demand(tmp_path, capsys):
+    """A sweep job leaves out its figures; ``report --runs`` draws them from its files."""
+    from compliant_docking.run.figures import redraw
+
+    run_dir = tmp_path / "job"
+    cfg = make_cfg(*SHORT)
+    execute(cfg, run_dir, figures=False, echo=False)
+    assert not (run_dir / "figures").exists()
+    (run_dir / ".hydra").mkdir()  # as Hydra leaves it: the composed config
+    (run_dir / ".hydra" / "config.yaml").write_text(OmegaConf.to_yaml(cfg))
+    fake_job(tmp_path / "failed", ["controller=hqp"], status="failed", error="x", success=False)
+    assert report.main([str(tmp_path), "--runs", "--no-figures", "--formats", "png", "pdf"]) == 0
+    out = capsys.readouterr()
+    assert "drew the figures of 1 of 2 runs" in out.out
+    assert "failed: no timeseries.parquet" in out.err  # named, not fatal
+    stems = ("tcp_tracking", "tracking_error", "contact_force", "joint_torques")
+    for stem in stems:
+        for fmt in ("png", "pdf"):
+            assert (run_dir / "figures" / f"{stem}.{fmt}").stat().st_size > 1000
+    with pytest.raises(ValueError, match="config.yaml"):  # the limits and axis come from it
+        (run_dir / ".hydra" / "config.yaml").unlink()
+        redraw(run_dir)
 
 
 def _sweep(root: Path, *parts: str, mtime: float | None = None) -> Path:

@@ -110,6 +110,8 @@ def test_config_hash_covers_the_config_not_how_it_reports():
     assert re.fullmatch(r"[0-9a-f]{16}", base)
     assert provenance.config_hash(make_cfg(*SHORT)) == base  # stable
     assert provenance.config_hash(make_cfg(*SHORT, "task.progress=true")) == base  # cosmetic
+    for figures in ("true", "false"):  # which files a job draws, not what it computes
+        assert provenance.config_hash(make_cfg(*SHORT, f"figures={figures}")) == base
     for change in (
         "controller.k=51",
         "robot=fr3",
