@@ -25,9 +25,14 @@ from hydra.types import RunMode
 from omegaconf import DictConfig, OmegaConf
 
 from compliant_docking import CONF_DIR
-from compliant_docking.config import register_schemas
+from compliant_docking.config import compose_cache, register_schemas
 from compliant_docking.sweep import launchers, resume
 from compliant_docking.sweep.session import SweepSession
+
+# Hydra composes each job's config in the launching process and again in the worker that
+# runs it: memoize what the compositions share (config/compose_cache.py). At import, so
+# the sweep's workers, which import this module to run the task, have it too.
+compose_cache.install()
 
 
 class CommandLine:

@@ -105,13 +105,18 @@ def _max_pct(values: np.ndarray, limits: np.ndarray) -> tuple[float | None, int 
 
 
 def manipulability_series(arm, q: np.ndarray) -> np.ndarray:
-    """√det(J Jᵀ) of the TCP's world Jacobian at each row of q."""
+    """√det(J Jᵀ) of the TCP's world Jacobian at each row of q.
+
+    The Jacobians step by step (Pinocchio), the products and determinants batched (the
+    same LAPACK call per matrix, so the same numbers as one step at a time).
+    """
     data = arm.model.createData()
-    out = np.empty(len(q))
+    jacobians = np.empty((len(q), 6, arm.nv))
+    jacobian = arm.world_jacobian
     for k, qk in enumerate(q):
-        J = arm.world_jacobian(qk, data)
-        out[k] = np.sqrt(max(float(np.linalg.det(J @ J.T)), 0.0))
-    return out
+        jacobians[k] = jacobian(qk, data)
+    gram = np.matmul(jacobians, jacobians.transpose(0, 2, 1))
+    return np.sqrt(np.maximum(np.linalg.det(gram), 0.0)) if len(q) else np.empty(0)
 
 
 # --------------------------------------------------------------------------- docking gate

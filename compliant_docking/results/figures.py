@@ -119,9 +119,11 @@ def metric_bars(df: pd.DataFrame, out_dir: str | Path | None = None, stem: str =
                         )
                         values = values.dropna()
                     if len(values):
-                        means.append(values.mean())
-                        lows.append(values.mean() - values.min())
-                        highs.append(values.max() - values.mean())
+                        mean = values.mean()
+                        means.append(mean)
+                        # ≥ 0: the mean of equal values can round a hair past them
+                        lows.append(max(mean - values.min(), 0.0))
+                        highs.append(max(values.max() - mean, 0.0))
                     else:
                         means.append(np.nan)
                         lows.append(0.0)
@@ -141,6 +143,7 @@ def metric_bars(df: pd.DataFrame, out_dir: str | Path | None = None, stem: str =
             ax.set_xticks(np.arange(len(groups)))
             ax.set_xticklabels(groups, fontsize=5.5, rotation=30 if len(groups) > 3 else 0)
             ax.tick_params(axis="y", labelsize=5.5)
+            ax.yaxis.get_offset_text().set_fontsize(5.5)
             ax.yaxis.set_major_locator(MaxNLocator(nbins=4))
             ax.set_title("success rate [%]" if row is None else row.heading, fontsize=6.5)
             if row is None:
@@ -320,12 +323,15 @@ def force_overlay(
     if not traces:
         return None
     plt = apply_style()
-    fig, ax = plt.subplots(figsize=(4.2, 2.4), constrained_layout=True)
+    fig, ax = plt.subplots(figsize=(4.2, 2.4))
+    # fixed margins [in] and a fixed legend corner: an automatic layout and the "best"
+    # legend place (searched against every point drawn) cost more than the drawing
+    fig.subplots_adjust(left=0.72 / 4.2, right=1 - 0.1 / 4.2, bottom=0.45 / 2.4, top=1 - 0.3 / 2.4)
     for label, t, axial in traces:
         ax.plot(*envelope(t, axial), lw=0.7, label=label)
     ax.set_xlabel("time [s]")
     ax.set_ylabel("axial contact force [N]")
-    ax.legend(fontsize=5.5, loc="best")
+    ax.legend(fontsize=5.5, loc="upper left")
     ax.set_title("axial contact force (pressing +)", fontsize=7)
     save_figure(fig, out_dir, stem)
     return fig

@@ -79,6 +79,14 @@ def _workers(config: DictConfig) -> str:
     return f"on {n_jobs} worker process{'es' if n_jobs != 1 else ''}"
 
 
+def _in_process(launcher_cfg: Any) -> bool:
+    """Whether the launcher runs the jobs in this process (Hydra's basic launcher)."""
+    try:
+        return str(launcher_cfg.get("_target_", "")).endswith("BasicLauncher")
+    except Exception:
+        return True
+
+
 class SweepCallback(Callback):
     """Progress lines and the end-of-sweep summary (see the module docstring).
 
@@ -118,6 +126,8 @@ class SweepCallback(Callback):
             emit(line)
         if independent and self.progress:  # the jobs print into their own log files
             session.watch(ProgressWatcher(sweep_dir, self.total))
+        if not _in_process(config.hydra.launcher):  # the summary's imports while the jobs run
+            session.preload(figures=self.figures)
 
     def on_multirun_end(self, config: DictConfig, **kwargs: Any) -> None:
         SweepSession.current().finish(

@@ -1,0 +1,202 @@
+"""Hydra's config composition, memoized within a process (:func:`install`).
+
+A sweep composes each job's config twice — in the launching process, where Hydra's
+sweeper checks every job before any starts, and in the worker that runs it — and a
+single run composes twice too (Hydra first composes to read ``hydra.mode``). Each
+composition parses the YAML files, builds the defaults tree and merges some 30 nodes
+into the typed schemas: about 0.15 s of CPU, a quarter of a default job's simulation
+loop. Most of it is the same from job to job: the jobs of a sweep differ in a few values
+(a seed, a gain) and often not at all in their config-group choices. So two memos, each
+keeping what Hydra computed and handing out a deep copy, so no caller shares a node:
+
+- the **defaults list** (which config files make up the config), keyed by the
+  overrides that choose config groups: Hydra computes the same list whatever the value
+  overrides (``key=value``), which it applies afterwards. A list found without leaving
+  a group unchosen (``???``) also serves the lenient request Hydra makes for
+  ``hydra.mode`` and for a sweep's master config;
+- the **merged config before the value overrides**, keyed by that defaults list.
+
+Both keys hold a stamp of each config directory (newest modification time, number of
+files), so an edited YAML file is read again. The typed schemas (the ConfigStore) are
+code and are taken as fixed within a process (:func:`clear` forgets everything). All
+that follows — the value overrides, Hydra's own ``hydra`` node (overrides, choices,
+output directory) — runs as before, for every job. Also, Hydra deep-copies its config
+repository for every composition, which copies the whole ConfigStore (~9 ms); a shallow
+copy does the same job (see :func:`_shallow_repository`).
+
+The composed configs equal Hydra's own, nodes, types and flags alike, in both run
+modes, and a wrong override is refused with the same error
+(tests/config/test_compose_cache.py). A composition that hits both memos takes ~15 ms of
+CPU instead of ~150 ms.
+
+It patches three functions of Hydra's internals (``hydra._internal``; Hydra is pinned to
+1.3 in pyproject.toml). :func:`install` is idempotent; the command line calls it on
+import (so the sweep's workers, which import it to run their jobs, have it too), and so
+does :func:`compliant_docking.config.load_config`.
+"""
+
+from __future__ import annotations
+
+import copy
+import os
+from typing import Any
+
+#: entries kept per memo; past that the memo is emptied (a sweep has a few group choices)
+MAX_ENTRIES = 256
+
+_defaults: dict[tuple, Any] = {}
+_composed: dict[tuple, Any] = {}
+#: (owner, attribute name, Hydra's original) of every patch in place
+_originals: list[tuple[Any, str, Any]] = []
+#: hits and misses of each memo since the last :func:`clear` (for tests and benchmarks)
+stats = {"defaults": [0, 0], "composed": [0, 0]}
+
+
+def clear() -> None:
+    """Forget everything memoized (and the counts)."""
+    for memo in (_defaults, _composed):
+        memo.clear()
+    for counts in stats.values():
+        counts[0] = counts[1] = 0
+
+
+def _remember(memo: dict, name: str, key: tuple, make) -> Any:
+    """The value for ``key`` (made by ``make()`` on a miss) — the kept original; callers copy."""
+    hit = memo.get(key)
+    if hit is None:
+        stats[name][1] += 1
+        hit = make()
+        if len(memo) >= MAX_ENTRIES:
+            memo.clear()
+        memo[key] = hit
+    else:
+        stats[name][0] += 1
+    return hit
+
+
+def _sources_key(repo) -> tuple:
+    """The config sources and, for directories of files, a stamp of their contents (the
+    newest modification time and the number of files): an edited, added or removed
+    YAML file makes a new key, so its next composition reads it again."""
+    return tuple(
+        (kind, s.provider, s.path, _stamp(s.path) if kind == "FileConfigSource" else None)
+        for s in repo.get_sources()
+        for kind in [type(s).__name__]
+    )  # package resources (Hydra's own) and the ConfigStore do not change
+
+
+def _stamp(path: str) -> tuple[int, int]:
+    newest, count = 0, 0
+    for folder, _dirs, files in os.walk(path):
+        for name in files:
+            try:
+                newest = max(newest, os.stat(os.path.join(folder, name)).st_mtime_ns)
+                count += 1
+            except OSError:
+                pass
+    return newest, count
+
+
+def installed() -> bool:
+    return bool(_originals)
+
+
+def uninstall() -> None:
+    """Put Hydra's own methods back and forget the memos (for tests)."""
+    while _originals:
+        owner, name, original = _originals.pop()
+        setattr(owner, name, original)
+    clear()
+
+
+def _patch(owner, name: str, make) -> None:
+    original = getattr(owner, name)
+    _originals.append((owner, name, original))
+    setattr(owner, name, make(original))
+
+
+def install() -> None:
+    """Patch Hydra's config loading with the memos (idempotent)."""
+    if _originals:
+        return
+    from hydra._internal import config_loader_impl
+    from hydra._internal.config_loader_impl import ConfigLoaderImpl
+    from hydra._internal.config_repository import CachingConfigRepository
+
+    _patch(config_loader_impl, "create_defaults_list", _defaults_list)
+    _patch(ConfigLoaderImpl, "_compose_config_from_defaults_list", _compose)
+    _patch(CachingConfigRepository, "__init__", _shallow_repository)
+
+
+def _shallow_repository(original):
+    def __init__(self, delegate) -> None:
+        # Hydra's own body deep-copies the delegate "to avoid mutating it with
+        # initialize_sources()", which copies the whole ConfigStore its schema source
+        # holds (~9 ms a composition). initialize_sources() rebinds the copy's list of
+        # sources to new ones, so a shallow copy leaves the original untouched just as well.
+        self.delegate = copy.copy(delegate)
+        self.cache = {}
+
+    return __init__
+
+
+def _defaults_list(original):
+    from hydra._internal.defaults_list import DefaultsList
+
+    def create_defaults_list(repo, config_name, overrides_list, prepend_hydra, skip_missing):
+        groups, values = [], []
+        for override in overrides_list:
+            if override.is_sweep_override():  # Hydra's defaults list ignores them too
+                continue
+            value = override.value()
+            is_value = isinstance(value, dict) or not repo.group_exists(override.key_or_group)
+            (values if is_value else groups).append(override)
+        if any(o.input_line is None for o in groups):
+            return original(repo, config_name, overrides_list, prepend_hydra, skip_missing)
+        key = (config_name, prepend_hydra, _sources_key(repo), tuple(o.input_line for o in groups))
+        kept = _remember(
+            _defaults,
+            "defaults",
+            key + (skip_missing,),
+            lambda: (
+                _lenient(original, repo, config_name, groups, prepend_hydra)
+                if skip_missing
+                else (True, original(repo, config_name, groups, prepend_hydra, False))
+            ),
+        )
+        if skip_missing and kept[0]:  # found strictly: the same list, filed for both
+            _defaults.setdefault(key + (False,), kept)
+        kept = kept[1]
+        overrides = copy.copy(kept.overrides)
+        overrides.config_overrides = values
+        return DefaultsList(
+            defaults=list(kept.defaults),
+            defaults_tree=kept.defaults_tree,
+            config_overrides=values,
+            overrides=overrides,
+        )
+
+    return create_defaults_list
+
+
+def _lenient(original, repo, config_name, groups, prepend_hydra) -> tuple[bool, Any]:
+    """(strict, list) for skip_missing=True — what Hydra composes for ``hydra.mode`` and a
+    sweep's master config: a list found strictly (no config group left ``???``) is the
+    same list, and then also serves the jobs' own compositions (skip_missing=False)."""
+    try:
+        return True, original(repo, config_name, groups, prepend_hydra, False)
+    except Exception:  # a group left missing: only the lenient list exists
+        return False, original(repo, config_name, groups, prepend_hydra, True)
+
+
+def _compose(original):
+    def compose(self, defaults, repo):
+        key = (
+            _sources_key(repo),
+            tuple(
+                (d.config_path, d.parent, d.package, d.is_self, d.primary, d.override_key) for d in defaults
+            ),
+        )
+        return copy.deepcopy(_remember(_composed, "composed", key, lambda: original(self, defaults, repo)))
+
+    return compose

@@ -1,0 +1,108 @@
+"""The composition memos (config/compose_cache.py) give the config Hydra gives without them."""
+
+from __future__ import annotations
+
+import shutil
+
+import pytest
+from hydra import initialize_config_dir
+from hydra.core.global_hydra import GlobalHydra
+from hydra.types import RunMode
+from omegaconf import DictConfig, ListConfig, OmegaConf
+
+from compliant_docking import CONF_DIR
+from compliant_docking.config import compose_cache, register_schemas
+
+#: group choices, value overrides, presets, nested and list values, an added key
+OVERRIDE_SETS = (
+    (),
+    ("task.misalignment.seed=3",),
+    ("controller=hqp", "robot=fr3", "controller.K0=[1,2,3,4,5,6]"),
+    ("+experiment=tracking_gate",),
+    ("+experiment=misalignment", "trajectory=se3topp"),
+    ("render=video", "controller.k=100", "figures=true"),
+)
+
+
+def tree(node, path: str = "", out: dict | None = None) -> dict:
+    """Every node's path → (class, object type, reference type, flags, optional): what the
+    YAML text leaves out, and what decides whether a later assignment is accepted."""
+    out = {} if out is None else out
+    meta = node._metadata
+    out[path] = (type(node).__name__, meta.object_type, meta.ref_type, dict(meta.flags or {}), meta.optional)
+    if isinstance(node, (DictConfig, ListConfig)) and not node._is_missing() and not node._is_none():
+        keys = node.keys() if isinstance(node, DictConfig) else range(len(node))
+        for key in keys:
+            tree(node._get_node(key), f"{path}.{key}", out)
+    return out
+
+
+def compose_all(sets) -> dict:
+    """Each set composed as the command line does, in both of Hydra's run modes, with
+    Hydra's own node: its YAML, its node tree, or the error it raised."""
+    register_schemas()
+    GlobalHydra.instance().clear()
+    out = {}
+    with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
+        hydra = GlobalHydra.instance().hydra
+        for overrides in sets:
+            for mode in (RunMode.MULTIRUN, RunMode.RUN):
+                try:
+                    cfg = hydra.compose_config("config", list(overrides), run_mode=mode)
+                    out[overrides, mode] = (OmegaConf.to_yaml(cfg), tree(cfg))
+                except Exception as exc:
+                    out[overrides, mode] = f"{type(exc).__name__}: {exc}"
+    return out
+
+
+@pytest.fixture
+def without_memos():
+    """Hydra's own composition for the test; the memos back afterwards."""
+    compose_cache.uninstall()
+    yield
+    compose_cache.install()
+
+
+def test_memoized_compositions_equal_hydras_own(without_memos):
+    plain = compose_all(OVERRIDE_SETS)
+    compose_cache.install()
+    first = compose_all(OVERRIDE_SETS)  # misses, then hits within the passes
+    again = compose_all(OVERRIDE_SETS)  # all hits
+    assert first == plain and again == plain
+    hits, misses = compose_cache.stats["composed"]
+    assert hits >= len(plain) and misses <= len(OVERRIDE_SETS)  # the memo served most
+
+
+@pytest.mark.parametrize(
+    "overrides",
+    [
+        ("controller.nope=1",),  # unknown key
+        ("controller=nope",),  # unknown option
+        ("controller.k=abc",),  # wrong type
+        ("robot=fr3", "controller.K0=[1]"),  # a key of another controller
+    ],
+)
+def test_a_wrong_override_is_refused_as_without_the_memos(without_memos, overrides):
+    plain = compose_all([overrides])
+    compose_cache.install()
+    assert compose_all([overrides]) == compose_all([overrides]) == plain
+    assert all(isinstance(v, str) for v in plain.values())  # refused, in both modes
+
+
+def test_an_edited_config_file_is_read_again(tmp_path):
+    conf = tmp_path / "conf"
+    shutil.copytree(CONF_DIR, conf)
+    register_schemas()
+    compose_cache.install()
+
+    def k() -> float:
+        GlobalHydra.instance().clear()
+        with initialize_config_dir(config_dir=str(conf), version_base="1.3"):
+            return (
+                GlobalHydra.instance().hydra.compose_config("config", [], run_mode=RunMode.RUN).controller.k
+            )
+
+    assert k() == 50.0 and k() == 50.0
+    path = conf / "controller" / "impedance.yaml"
+    path.write_text(path.read_text().replace("k: 50.0", "k: 77.0"))
+    assert k() == 77.0
