@@ -12,7 +12,7 @@ from hydra.core.config_store import ConfigStore
 from omegaconf import DictConfig
 
 from compliant_docking import CONF_DIR
-from compliant_docking.config import compose_cache
+from compliant_docking.config.compose_cache import install as install_compose_cache
 from compliant_docking.config.geometry import ContactParams, PlugGeometry, SocketGeometry
 from compliant_docking.config.keyed import KeyedPlugGeometry, KeyedSocketGeometry
 from compliant_docking.config.schemas import (
@@ -79,7 +79,7 @@ def load_config(*overrides: str) -> DictConfig:
     from hydra import compose, initialize_config_dir
     from hydra.core.global_hydra import GlobalHydra
 
-    compose_cache.install()  # repeated compositions reuse the parsed files and merged trees
+    install_compose_cache()  # repeated compositions reuse the parsed files and merged trees
     register_schemas()
     GlobalHydra.instance().clear()
     with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):

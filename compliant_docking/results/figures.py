@@ -6,8 +6,8 @@
   socket misalignment (lateral, yaw, tilt: the components that vary);
 - :func:`force_overlay`: the axial contact force over time of selected runs, read from
   their ``timeseries.parquet``;
-- :func:`plot_comparison`: all of them into one folder (what the sweep callback and
-  ``python -m compliant_docking.report`` call).
+- :func:`plot_comparison`: those that have something to show into one folder (what
+  the sweep callback and ``python -m compliant_docking.report`` call).
 
 Every function returns the matplotlib Figure (for a notebook: ``display(fig)``) and,
 given ``out_dir``, also saves it as ``<stem>.png`` (other formats: ``formats``, e.g.
@@ -17,8 +17,9 @@ given ``out_dir``, also saves it as ``<stem>.png`` (other formats: ``formats``, 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -338,15 +339,22 @@ def force_overlay(
 
 
 def plot_comparison(df: pd.DataFrame, out_dir: str | Path, formats: Sequence[str] = FORMATS) -> list[Path]:
-    """All comparison figures of ``df`` into ``out_dir`` (PNG, or ``formats``); returns the files."""
+    """All comparison figures of ``df`` into ``out_dir`` (PNG, or ``formats``); returns the files.
+
+    The bars only when there are configurations to compare (:func:`configuration_keys`:
+    repeats of one configuration are one bar per panel, which the table says better);
+    the success against the misalignment only when the misalignment varies.
+    """
     plt = apply_style()
     out = Path(out_dir)
     saved: list[Path] = []
-    for make, stem in (
-        (metric_bars, "table10_bars"),
+    makers: list[tuple[Callable[[pd.DataFrame], Any], str]] = [
         (success_vs_misalignment, "success_vs_misalignment"),
         (force_overlay, "force_overlay"),
-    ):
+    ]
+    if configuration_keys(df):
+        makers.insert(0, (metric_bars, "table10_bars"))
+    for make, stem in makers:
         fig = make(df)
         if fig is None:
             continue

@@ -227,13 +227,20 @@ def test_write_summary_and_report_command(tmp_path, capsys):
 def test_report_draws_the_comparison_figures(real_run, tmp_path):
     out = tmp_path / "out"
     assert report.main([str(real_run), "--out", str(out)]) == 0
-    for stem in ("table10_bars", "force_overlay"):
-        assert (out / "comparison" / f"{stem}.png").stat().st_size > 1000
-        assert not (out / "comparison" / f"{stem}.pdf").exists()  # PNG unless asked
-    assert not (out / "comparison" / "success_vs_misalignment.png").exists()  # nothing varies
+    assert (out / "comparison" / "force_overlay.png").stat().st_size > 1000
+    assert not (out / "comparison" / "force_overlay.pdf").exists()  # PNG unless asked
+    # one configuration: no bars to compare; nothing misaligned: no success curve
+    assert sorted(p.name for p in (out / "comparison").iterdir()) == ["force_overlay.png"]
     assert report.main([str(real_run), "--out", str(out), "--formats", "png", "pdf"]) == 0
-    assert (out / "comparison" / "table10_bars.pdf").stat().st_size > 1000
+    assert (out / "comparison" / "force_overlay.pdf").stat().st_size > 1000
     assert report.main([str(real_run), "--formats", "gif"]) == 2  # refused, naming the formats
+
+    two = tmp_path / "two"  # two controllers: the bars compare them
+    fake_job(two / "0_a", ["controller=impedance"])
+    fake_job(two / "1_b", ["controller=hqp"], controller="hqp")
+    assert report.main([str(two), "--formats", "png", "pdf"]) == 0
+    for fmt in ("png", "pdf"):
+        assert (two / "comparison" / f"table10_bars.{fmt}").stat().st_size > 1000
 
 
 def test_report_draws_the_runs_own_figures_on_demand(tmp_path, capsys):

@@ -92,9 +92,9 @@ def _compose_multirun(*overrides: str):
         return compose("config", overrides=list(overrides), return_hydra_config=True)
 
 
-def test_sweeps_run_on_joblib_with_one_worker_per_core_and_the_summary_callback():
+def test_sweeps_run_on_the_worker_pool_with_one_worker_per_core_and_the_summary_callback():
     cfg = _compose_multirun()
-    assert cfg.hydra.launcher._target_.endswith("JoblibLauncher")
+    assert cfg.hydra.launcher._target_ == "hydra_plugins.compliant_docking_launcher.PoolLauncher"
     assert cfg.hydra.launcher.n_jobs == -1
     assert cfg.hydra.callbacks.sweep._target_ == "compliant_docking.sweep.callback.SweepCallback"
     assert cfg.hydra.sweep.dir.startswith("runs/multirun/")

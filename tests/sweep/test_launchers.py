@@ -72,12 +72,15 @@ def _files(job_dir: Path) -> set[str]:
     return {str(p.relative_to(job_dir)) for p in job_dir.rglob("*") if p.is_file()}
 
 
-def test_submitit_local_sweep_gives_the_same_outputs_as_joblib(tmp_path):
+def test_the_default_pool_hydras_joblib_and_submitit_local_give_the_same_outputs(tmp_path):
     """Same job directories, metrics (timing and start time aside), time series, failure
     records, summary rows, end-of-sweep summary and exit status (1: a job failed);
-    submitit's logs stay in .submitit/."""
+    submitit's logs stay in .submitit/. The default launcher (sweep/pool.py) sends each
+    job the config composed in the launching process; Hydra's joblib launcher composes it
+    again in the worker, submitit in the job's own process: the jobs must not tell."""
     runs = {
-        "joblib": _start_sweep(tmp_path / "joblib", "hydra.launcher.n_jobs=2"),
+        "pool": _start_sweep(tmp_path / "pool", "hydra.launcher.n_jobs=2"),
+        "joblib": _start_sweep(tmp_path / "joblib", "hydra/launcher=joblib", "hydra.launcher.n_jobs=2"),
         "submitit": _start_sweep(tmp_path / "submitit", "hydra/launcher=submitit_local"),
     }
     out = {name: proc.communicate(timeout=300) for name, proc in runs.items()}
@@ -92,14 +95,20 @@ def test_submitit_local_sweep_gives_the_same_outputs_as_joblib(tmp_path):
             "[3/3] ",
         ]  # one progress line per job
     assert "as local submitit processes" in out["submitit"][0]
+    assert "PoolLauncher(2 workers) is launching 3 jobs" in out["pool"][0]
 
     jobs = {
         name: sorted(p for p in (tmp_path / name).iterdir() if p.is_dir() and not p.name.startswith("."))
         for name in runs
     }
-    assert [p.name for p in jobs["joblib"]] == [p.name for p in jobs["submitit"]]
-    assert len(jobs["joblib"]) == 3
-    for a, b in zip(jobs["joblib"], jobs["submitit"]):
+    assert (
+        [p.name for p in jobs["pool"]]
+        == [p.name for p in jobs["joblib"]]
+        == [p.name for p in jobs["submitit"]]
+    )
+    assert len(jobs["pool"]) == 3
+    pairs = [*zip(jobs["pool"], jobs["joblib"]), *zip(jobs["pool"], jobs["submitit"])]
+    for a, b in pairs:
         assert _files(a) == _files(b), a.name
         ma = json.loads((a / "metrics.json").read_text())
         mb = json.loads((b / "metrics.json").read_text())
@@ -112,7 +121,8 @@ def test_submitit_local_sweep_gives_the_same_outputs_as_joblib(tmp_path):
         assert ma["status"] == "ok"
         ta, tb = pd.read_parquet(a / "timeseries.parquet"), pd.read_parquet(b / "timeseries.parquet")
         pd.testing.assert_frame_equal(ta, tb, check_exact=True)
-        assert (a / ".hydra" / "overrides.yaml").read_text() == (b / ".hydra" / "overrides.yaml").read_text()
+        for name in ("overrides.yaml", "config.yaml"):
+            assert (a / ".hydra" / name).read_text() == (b / ".hydra" / name).read_text()
 
     # the summaries: same files, same rows
     for name in runs:
@@ -123,11 +133,12 @@ def test_submitit_local_sweep_gives_the_same_outputs_as_joblib(tmp_path):
             "summary.parquet",
             "comparison.csv",
         }
-    sa = pd.read_parquet(tmp_path / "joblib" / "summary.parquet")
-    sb = pd.read_parquet(tmp_path / "submitit" / "summary.parquet")
-    assert list(sa.columns) == list(sb.columns) and len(sa) == len(sb) == 3
-    keep = [c for c in sa.columns if c not in VARYING | {"run_dir"}]
-    pd.testing.assert_frame_equal(sa[keep], sb[keep], check_exact=True)
+    sa = pd.read_parquet(tmp_path / "pool" / "summary.parquet")
+    for other in ("joblib", "submitit"):
+        sb = pd.read_parquet(tmp_path / other / "summary.parquet")
+        assert list(sa.columns) == list(sb.columns) and len(sa) == len(sb) == 3
+        keep = [c for c in sa.columns if c not in VARYING | {"run_dir"}]
+        pd.testing.assert_frame_equal(sa[keep], sb[keep], check_exact=True)
 
     # submitit's logs and pickles: a hidden folder of the sweep, which load_runs never reads
     logs = list((tmp_path / "submitit" / ".submitit").rglob("*_log.out"))
