@@ -2,7 +2,8 @@
 
     python benchmarks/sweep_efficiency.py [--runs 8] [--workers 2] [--repeat 1]
 
-Three wall times of the same N default docking runs (figures drawn, as every job does):
+Three wall times of the same N default docking runs, none drawing per-run figures (as
+in a sweep; the single commands get ``figures=false`` so all three do the same work):
 
 - **parallel**: one command ``python -m compliant_docking -m task.misalignment.seed=0,…``
   with ``hydra.launcher.n_jobs=WORKERS``, timed from start to exit: interpreter and Hydra
@@ -15,7 +16,7 @@ Three wall times of the same N default docking runs (figures drawn, as every job
 - **sequential, in-process** (stricter, for diagnosis): the N runs through
   ``compliant_docking.run.runner.execute`` in this one process (config composed with
   ``load_config``), libraries imported once, no start-up per run. Its ratio shows what
-  Hydra's and the pool's fixed costs (≈ 4-5 s per sweep) take from the ideal 1/WORKERS.
+  Hydra's and the pool's fixed costs take from the ideal 1/WORKERS.
 
 Prints the wall times and ratio = parallel / sequential for both baselines, and whether
 the commands ratio meets the target (≤ 0.6 for 8 runs on 2 workers). With ``--repeat``
@@ -48,7 +49,7 @@ def sequential(runs: int, out: Path) -> float:
 
     start = time.perf_counter()
     for i in range(runs):
-        record = execute(load_config("task.progress=false"), out / f"run_{i}", echo=False)
+        record = execute(load_config("task.progress=false"), out / f"run_{i}", figures=False, echo=False)
         if record["status"] == "failed":
             raise SystemExit(f"sequential run {i} failed: {record['error']}")
     return time.perf_counter() - start
@@ -64,6 +65,7 @@ def commands(runs: int, out: Path) -> float:
                 "-m",
                 "compliant_docking",
                 "task.progress=false",
+                "figures=false",
                 f"hydra.run.dir={out / f'run_{i}'}",
             ],
             cwd=REPO,
