@@ -20,8 +20,11 @@ callbacks), its results in job order, its error when a job's process dies
 (``TerminatedWorkerError``, as with joblib). On any exception — a dead worker, Ctrl-C,
 SIGTERM — the workers are killed before it propagates, so the summary of an aborted
 sweep (:meth:`~compliant_docking.sweep.session.SweepSession.finish_aborted`) runs after
-they are gone, as with joblib. Of the joblib launcher's keys (the schema is kept, so
-``hydra.launcher.n_jobs=N`` works as before) only ``n_jobs`` is read.
+they are gone, as with joblib; a sweeper that launches batch after batch (the tuning
+study, which goes on after a failed batch) gets new workers for the next one. A job
+whose config the sweeper did not check is composed here, in the launching process. Of
+the joblib launcher's keys (the schema is kept, so ``hydra.launcher.n_jobs=N`` works as
+before) only ``n_jobs`` is read.
 """
 
 from __future__ import annotations
@@ -47,7 +50,6 @@ class PoolLauncher(Launcher):
         self.config: Any = None
         self.task_function: Any = None
         self.hydra_context: Any = None
-        self.executor: Any = None
         self.composed: dict[tuple[str, ...], Any] = {}
         self._compose: Any = None
 
@@ -78,16 +80,21 @@ class PoolLauncher(Launcher):
         loader.load_sweep_config = load_sweep_config  # an instance attribute, removed in launch
         self._compose = original
 
-    def _start_workers(self) -> None:
+    def _executor(self):
+        """loky's reusable executor for :meth:`workers` processes: the running one, or a new
+        one when there is none or it was stopped (a dead worker, an interrupted batch)."""
         from joblib._parallel_backends import LokyBackend
         from joblib.externals.loky import get_reusable_executor
 
         n = self.workers()
-        self.executor = get_reusable_executor(
+        return get_reusable_executor(
             max_workers=n, timeout=IDLE_WORKER_TIMEOUT_S, env=LokyBackend()._prepare_worker_env(n_jobs=n)
         )
-        for _ in range(n):  # each worker imports the job's libraries while the sweeper checks
-            self.executor.submit(_import_job_libraries)
+
+    def _start_workers(self) -> None:
+        executor = self._executor()
+        for _ in range(self.workers()):  # each worker imports the job's libraries while the sweeper checks
+            executor.submit(_import_job_libraries)
 
     def launch(self, job_overrides: Sequence[Sequence[str]], initial_job_idx: int) -> Sequence[JobReturn]:
         from hydra.core.singleton import Singleton
@@ -100,14 +107,15 @@ class PoolLauncher(Launcher):
         configs = [
             self.composed.pop(tuple(o), None) or self._compose(self.config, list(o)) for o in job_overrides
         ]
-        vars(loader).pop("load_sweep_config", None)  # not sent to the workers with the context
+        keeping = vars(loader).pop("load_sweep_config", None)  # not sent to the workers with the context
         log.info(f"PoolLauncher({self.workers()} workers) is launching {len(job_overrides)} jobs")
         for idx, overrides in enumerate(job_overrides):
             log.info(f"\t#{initial_job_idx + idx} : {' '.join(filter_overrides(overrides))}")
         singleton_state = Singleton.get_state()
+        executor = self._executor()
         try:
             futures = [
-                self.executor.submit(
+                executor.submit(
                     execute_job,
                     initial_job_idx + idx,
                     cfg,
@@ -119,8 +127,11 @@ class PoolLauncher(Launcher):
             ]
             return [future.result() for future in futures]
         except BaseException:  # a dead worker, Ctrl-C, SIGTERM: stop the others before going on
-            self.executor.shutdown(wait=True, kill_workers=True)
+            executor.shutdown(wait=True, kill_workers=True)
             raise
+        finally:  # every job has been sent: keep the checked configs of a next batch (a tuning study)
+            if keeping is not None:
+                loader.load_sweep_config = keeping
 
 
 def execute_job(idx: int, sweep_config, hydra_context, task_function, singleton_state) -> JobReturn:

@@ -39,6 +39,7 @@ def test_a_sweep_is_a_parent_run_with_one_child_run_per_job(tmp_path, store):
         *SHORT,
         "robot=iiwa14,fr3",
         "+tracking=mlflow",
+        "figures=true",  # sweep jobs draw none by default: here they do, to log them
         "hydra.callbacks.sweep.figures=false",
         env={"MLFLOW_TRACKING_URI": store},
     )
