@@ -67,7 +67,12 @@ def compute_metrics(
 
     q = ts[[f"q{i + 1}" for i in range(nv)]].to_numpy()
     v = ts[[f"v{i + 1}" for i in range(nv)]].to_numpy()
-    pos_pct, pos_joint = _max_pct(np.abs(q - (q_upper + q_lower) / 2), (q_upper - q_lower) / 2)
+    lower, upper = np.asarray(q_lower, float), np.asarray(q_upper, float)
+    half_range = (upper - lower) / 2
+    ranged = np.isfinite(half_range)  # an unlimited joint has no middle (no inf − inf)
+    mid = np.zeros_like(half_range)
+    mid[ranged] = (upper[ranged] + lower[ranged]) / 2
+    pos_pct, pos_joint = _max_pct(np.abs(q - mid), half_range)
     vel_pct, vel_joint = _max_pct(np.abs(v), np.asarray(velocity_limits, dtype=float))
 
     pos_err = ts[POSITION].to_numpy() - ts[POSITION_REF].to_numpy()
@@ -214,7 +219,7 @@ def docking_gate(
     ]
     failures = []
     for label, value, limit, unit in checks:
-        if value is None:
+        if value is None or not np.isfinite(value):  # fail closed
             failures.append(f"{label} not available (non-finite or no data)")
         elif value > limit:
             failures.append(f"{label} {value:.4g} {unit} > {limit:g} {unit}")
