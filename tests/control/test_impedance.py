@@ -1,11 +1,10 @@
-"""Closed-loop properties of the impedance controller and the F/T measurement chain."""
+"""Closed-loop statics of the impedance controllers (the F/T chain: tests/sim/test_sensor.py;
+transients: tests/control/test_transients.py)."""
 
-import mujoco
 import numpy as np
 import pinocchio as pin
 import pytest
 
-from compliant_docking.sim.sensor import wrench_reader
 from compliant_docking.sim.simulate import prepare
 from tests.helpers import make_cfg, push_at_tcp
 
@@ -53,34 +52,3 @@ def test_without_force_feedback_the_arm_is_stiffer_than_k():
     sim.run()
     dx = sim.scene.arm.tcp_placement(sim.data.qpos).translation[0] - start.translation[0]
     assert abs(dx - 2.0 / float(sim.cfg.controller.k)) > 0.1 * 2.0 / float(sim.cfg.controller.k)
-
-
-@pytest.mark.parametrize("physics", ["space", "earth"])
-def test_wrench_reader_returns_the_applied_wrench_at_the_tcp(physics):
-    """Static: the arm is held by inverse dynamics; the sensor chain recovers the push,
-    with the sign of a wrench ON the tool, the moment about the TCP, and the tool's
-    weight compensated."""
-    sim = prepare(make_cfg(*FREE_SPACE, f"physics={physics}"))
-    model, data = sim.scene.model, sim.data
-    force, moment = np.array([1.0, -2.0, 3.0]), np.array([0.1, 0.05, -0.2])
-    push_at_tcp(sim, force=force, moment=moment)
-    model.actuator_ctrlrange[:] = [-1e6, 1e6]
-    # torques that hold the arm still against gravity and the push
-    pushed = np.zeros(model.nv)
-    body = sim.scene.tool_body
-    mujoco.mj_applyFT(
-        model,
-        data,
-        data.xfrc_applied[body, :3].copy(),
-        data.xfrc_applied[body, 3:].copy(),
-        data.xipos[body].copy(),
-        body,
-        pushed,
-    )
-    data.ctrl[:] = data.qfrc_bias - pushed
-    mujoco.mj_step(model, data)
-    assert np.abs(data.qvel).max() < 1e-6
-    out = np.zeros(6)
-    wrench_reader(sim.scene, data, out)()
-    assert np.allclose(out[:3], force, atol=1e-6)
-    assert np.allclose(out[3:], moment, atol=1e-6)
