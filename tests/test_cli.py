@@ -44,6 +44,16 @@ def test_console_script_help_is_the_module_help():
     assert "Configuration groups" in script.stdout and "controller" in script.stdout
     assert "compliant-docking -m +experiment=tune" in script.stdout
     assert script.stdout == module.stdout  # one command, two spellings
+    # every group on one line with its options, the default first
+    for group, options in (
+        ("controller", "impedance, hqp, se3_lie"),
+        ("robot", "iiwa14, fr3"),
+        ("trajectory", "quintic"),
+        ("experiment", "controller_comparison"),
+    ):
+        line = next(line for line in module.stdout.splitlines() if line.strip().startswith(group + " "))
+        assert options in line, (group, line)
+    assert "Exit status: 0 success, 1" in module.stdout and "The composed configuration" in module.stdout
 
 
 def test_completion_install_script_registers_the_console_script():

@@ -2,8 +2,6 @@
 
 import json
 
-import numpy as np
-import pandas as pd
 import pytest
 
 from compliant_docking.evaluation.registry import DOCKING_KEYS
@@ -28,39 +26,22 @@ REQUIRED = {
 }
 
 
-@pytest.mark.parametrize("physics", ["space", "earth"])
-def test_default_scene_docks(tmp_path, physics):
-    record = execute(
-        make_cfg(f"physics={physics}", "task.progress=false"), tmp_path, figures=False, echo=False
-    )
+def test_default_scene_docks_under_gravity(tmp_path):
+    """The default scene with gravity on (physics=earth); its zero-g twin runs through the
+    command line (tests/run/test_cli.py). Seated (< 1 mm) inside the 0.4 mm clearance
+    (+0.1 mm chamfer play); pressed home with k·5 mm = 0.25 N (measured 0.24999 N: 0.1 %);
+    peak force 3.57 N, higher than zero-g's 1.37 N (±10 %: a one-step contact impulse)."""
+    record = execute(make_cfg("physics=earth", "task.progress=false"), tmp_path, figures=False, echo=False)
     assert record["status"] == "ok" and record["error"] is None
     assert record["success"] is True, record["gate_failures"]
-    assert record["seat_depth_error_m"] < 1e-3  # seated
-    assert record["seat_lateral_error_m"] < 0.4e-3 + 1e-4  # inside the bore's clearance
-    assert 1.0 < record["peak_axial_force_N"] < 50.0  # it touched, and not violently
-    # pressed home by the 5 mm press of the reference past the seat: k · 5 mm
-    assert record["steady_axial_force_N"] == pytest.approx(50.0 * 0.005, rel=0.1)
+    assert record["seat_depth_error_m"] < 1e-3
+    assert record["seat_lateral_error_m"] < 0.4e-3 + 1e-4
+    assert record["peak_axial_force_N"] == pytest.approx(3.57, rel=0.1)
+    assert record["steady_axial_force_N"] == pytest.approx(50.0 * 0.005, rel=1e-3)
     assert record["sim_time_s"] == pytest.approx(18.0)
     text = (tmp_path / "metrics.json").read_text()
     assert REQUIRED <= json.loads(text).keys()
     assert "NaN" not in text and "Infinity" not in text
-
-
-def test_cli_run_writes_the_run_directory(tmp_path):
-    run_dir = tmp_path / "run"
-    result = run_cli(f"hydra.run.dir={run_dir}", "task.progress=false")
-    assert result.returncode == 0, result.stderr[-2000:]
-    assert "success true" in result.stdout
-    for name in ("metrics.json", "timeseries.parquet", "summary.txt", ".hydra/config.yaml"):
-        assert (run_dir / name).is_file(), name
-    for stem in ("tcp_tracking", "tracking_error", "contact_force", "joint_torques"):
-        assert (run_dir / "figures" / f"{stem}.png").stat().st_size > 1000
-    assert not list((run_dir / "figures").glob("*.pdf"))  # PDF on request (report --formats)
-    metrics = json.loads((run_dir / "metrics.json").read_text())
-    assert metrics["success"] is True and metrics["controller"] == "impedance"
-    ts = pd.read_parquet(run_dir / "timeseries.parquet")
-    assert len(ts) == 18000 and np.isfinite(ts.drop(columns=["torque_saturated"]).to_numpy(float)).all()
-    assert not list(run_dir.glob(".*.tmp")) and not list(run_dir.glob("*.tmp"))
 
 
 def test_diverging_run_fails_cleanly(tmp_path):
