@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import re
 import socket
 import subprocess
@@ -65,8 +66,11 @@ def test_every_run_records_its_provenance(short_run):
     assert started.tzinfo is not None  # ISO 8601 with the UTC offset
     assert abs((datetime.now().astimezone() - started).total_seconds()) < 600
     assert saved["config_hash"] == provenance.config_hash(make_cfg(*SHORT))
-    if (REPO_ROOT / ".git").exists():  # run from a checkout (CI, make test)
-        assert re.fullmatch(r"[0-9a-f]{40}", saved["git_commit"])
+    if (REPO_ROOT / ".git").exists():  # run from a checkout (CI, make test): its HEAD
+        head = subprocess.run(
+            ["git", "-C", str(REPO_ROOT), "rev-parse", "HEAD"], capture_output=True, text=True, check=True
+        ).stdout.strip()
+        assert saved["git_commit"] == head
         assert isinstance(saved["git_dirty"], bool)
     # load_runs surfaces every key as a column
     row = load_runs(run_dir).iloc[0]
@@ -94,6 +98,56 @@ def test_versions_and_git_are_computed_once_per_process(monkeypatch):
     assert {k: v for k, v in first.items() if k != "started_at"} == {
         k: v for k, v in second.items() if k != "started_at"
     }
+
+
+def _git(repo, *args: str) -> str:
+    env = {
+        "GIT_AUTHOR_NAME": "t",
+        "GIT_AUTHOR_EMAIL": "t@t",
+        "GIT_COMMITTER_NAME": "t",
+        "GIT_COMMITTER_EMAIL": "t@t",
+    }
+    return subprocess.run(
+        ["git", "-C", str(repo), *args], capture_output=True, text=True, check=True, env={**os.environ, **env}
+    ).stdout.strip()
+
+
+def _state_of(monkeypatch, root):
+    monkeypatch.setattr(provenance, "REPO_ROOT", root)
+    provenance.git_state.cache_clear()
+    try:
+        return provenance.git_state()
+    finally:
+        provenance.git_state.cache_clear()
+
+
+def test_git_commit_is_head_and_git_dirty_follows_the_tree(monkeypatch, tmp_path):
+    """In a checkout of its own: clean → dirty false; an edited, a staged or an untracked
+    file → true; an ignored file → false; a linked worktree (.git is a file) works too."""
+    repo = tmp_path / "repo"
+    repo.mkdir()
+    _git(repo, "init", "-q")
+    (repo / "a.py").write_text("x = 1\n")
+    (repo / ".gitignore").write_text("runs/\n")
+    _git(repo, "add", "-A")
+    _git(repo, "commit", "-q", "-m", "first")
+    head = _git(repo, "rev-parse", "HEAD")
+    assert _state_of(monkeypatch, repo) == {"git_commit": head, "git_dirty": False}
+    (repo / "runs").mkdir()
+    (repo / "runs" / "metrics.json").write_text("{}")  # ignored: still clean
+    assert _state_of(monkeypatch, repo)["git_dirty"] is False
+    (repo / "a.py").write_text("x = 2\n")  # edited
+    assert _state_of(monkeypatch, repo) == {"git_commit": head, "git_dirty": True}
+    _git(repo, "add", "a.py")  # staged
+    assert _state_of(monkeypatch, repo)["git_dirty"] is True
+    _git(repo, "commit", "-q", "-m", "second")
+    second = _git(repo, "rev-parse", "HEAD")
+    assert second != head and _state_of(monkeypatch, repo) == {"git_commit": second, "git_dirty": False}
+    (repo / "new.py").write_text("")  # untracked
+    assert _state_of(monkeypatch, repo)["git_dirty"] is True
+    _git(repo, "worktree", "add", "-q", str(tmp_path / "linked"), "HEAD")
+    assert (tmp_path / "linked" / ".git").is_file()
+    assert _state_of(monkeypatch, tmp_path / "linked") == {"git_commit": second, "git_dirty": False}
 
 
 def test_git_fields_are_null_outside_a_checkout(monkeypatch, tmp_path):
