@@ -144,6 +144,11 @@ def test_hqp_with_the_observer_docks_and_reports_it(tmp_path, robot):
     diff = ts[list(WRENCH_COLUMNS[:3])].to_numpy() - ts[["fx", "fy", "fz"]].to_numpy()
     rms = float(np.sqrt(np.mean(np.sum(diff**2, axis=1))))
     assert rms == pytest.approx(rec["observer_force_err_rms_N"], rel=1e-9)
-    if robot == "iiwa14":  # exact model, no friction: the run docks as with the sensor
-        assert rec["success"], rec["gate_failures"]
+    assert rec["success"], rec["gate_failures"]  # both dock on the estimate alone
+    if robot == "iiwa14":  # exact model, no friction: 0.012 N measured in the steady window
         assert rec["observer_force_err_steady_N"] < 0.05
+    else:  # the FR3's joints stick: friction (up to 1.14 N·m) the observer's model lacks
+        # shows as 1.09 N / 0.34 N·m (measured): tenfold the iiwa14's, and under 1.5 N /
+        # 0.5 N·m, a tenth of what a full 1.14 N·m on every joint could hide here (11 N)
+        assert 0.2 < rec["observer_force_err_steady_N"] < 1.5
+        assert rec["observer_moment_err_steady_Nm"] < 0.5

@@ -205,9 +205,11 @@ def test_summary_prints_the_gate():
 
 
 # --------------------------------------------------------------------------- end to end
-#: per-segment position RMS targets [m] (circle, figure-8): at least as good as the
-#: research code (iiwa14 0.236 / 0.269 mm, FR3 1.545 / 0.938 mm)
-TARGETS = {"iiwa14": (0.25e-3, 0.25e-3), "fr3": (1.5e-3, 0.938e-3)}
+#: per-segment position RMS bounds [m] (circle, figure-8): 1.5× the worst measured over
+#: the three controllers (iiwa14 0.016 / 0.032 mm, FR3 0.171 / 0.211 mm), so a regression
+#: of half the error fails; the research code's values (iiwa14 0.236 / 0.269 mm, FR3
+#: 1.545 / 0.938 mm) are 5-15× looser than ours and would hide one
+TARGETS = {"iiwa14": (0.024e-3, 0.048e-3), "fr3": (0.26e-3, 0.32e-3)}
 
 
 def available_controllers():
@@ -234,20 +236,14 @@ def test_the_preset_passes_on_both_robots(robot, controller, tmp_path):
     assert saved["tracking_gate"] == "PASS" and saved["gate_failures"] is None
 
 
-def test_cli_exit_status_pass_and_fail():
-    ok = run_cli(
-        "+experiment=tracking_gate",
-        "robot=fr3",
-        "task.progress=false",
-        "hydra.run.dir=${oc.env:TMPDIR,/tmp}/cd_tracking_gate_pass",
-    )
-    assert ok.returncode == 0, ok.stdout + ok.stderr
-    assert "[tracking gate: PASS]" in ok.stdout
+def test_a_gate_failure_exits_3_through_the_command_line(tmp_path):
+    """The PASS side runs in-process above (every robot and controller); here the command
+    line turns a FAIL into exit status 3 and prints the failing item."""
     bad = run_cli(
         "+experiment=tracking_gate",
         "task.progress=false",
         "task.tracking_gate.circle_position_rms_m=1e-7",
-        "hydra.run.dir=${oc.env:TMPDIR,/tmp}/cd_tracking_gate_fail",
+        f"hydra.run.dir={tmp_path / 'run'}",
     )
     assert bad.returncode == 3, bad.stdout + bad.stderr
     assert "tracking gate FAIL" in bad.stdout and "circle position RMS" in bad.stdout

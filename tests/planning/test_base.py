@@ -31,11 +31,43 @@ def test_table_equals_sample(make):
 
 
 # --------------------------------------------------------------------------- configs
-@pytest.mark.parametrize("planner", ["twophase", "se3topp", "tracking"])
-def test_config_defaults_match_the_schema_and_unknown_keys_are_rejected(planner):
-    cfg = make_cfg(f"trajectory={planner}")
-    node = OmegaConf.to_container(cfg.trajectory)
-    assert node["name"] == planner
+#: each planner's defaults as CONTROL_LAWS.md §4 states them (Table 8 for se3topp)
+SPEC_DEFAULTS = {
+    "quintic": dict(duration=15.0),
+    "twophase": dict(
+        standoff=0.10, v_max_approach=0.10, a_max_approach=0.20, v_max_docking=0.02, a_max_docking=0.05
+    ),
+    "se3topp": dict(
+        standoff=0.10,
+        v_max_approach=0.10,
+        a_max_approach=0.20,
+        omega_max_approach=0.20,
+        alpha_max_approach=0.20,
+        v_max_docking=0.02,
+        a_max_docking=0.05,
+        omega_max_docking=0.05,
+        alpha_max_docking=0.05,
+    ),
+    "tracking": dict(
+        transition_duration=1.5,
+        circle_duration=5.0,
+        circle_radius=0.10,
+        circle_frequency=0.2,
+        circle_center_offset=-0.06,
+        figure8_duration=5.0,
+        figure8_radius_x=0.10,
+        figure8_radius_y=0.07,
+        figure8_frequency=0.2,
+    ),
+}
+
+
+@pytest.mark.parametrize("planner", SPEC_DEFAULTS)
+def test_composed_defaults_are_the_specified_values_and_unknown_keys_are_rejected(planner):
+    """Every parameter the planner takes comes from its YAML with the value of the spec."""
+    node = OmegaConf.to_container(make_cfg(f"trajectory={planner}").trajectory, resolve=True)
+    assert node.pop("name") == planner and node.pop("_target_").endswith("Planner")
+    assert node == SPEC_DEFAULTS[planner]
     with pytest.raises(Exception, match="bogus"):
         make_cfg(f"trajectory={planner}", "trajectory.bogus=1")
 

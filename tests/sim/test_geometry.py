@@ -279,17 +279,35 @@ def test_bad_parameters_raise_value_error_naming_the_setting(make, setting):
         make()
 
 
-def test_good_pair_passes_fit_check():
-    check_fit(replace(PLUG), replace(SOCKET))
+def test_fit_check_boundaries():
+    """The default pair fits; the plug radius may approach the bore radius (plug radius +
+    clearance) but not reach it, and the plug must be longer than the bore is deep."""
+    check_fit(replace(PLUG), replace(SOCKET))  # raises if not
+    bore, depth = SOCKET.bore_radius, SOCKET.insertion_depth
+    assert bore == pytest.approx(SOCKET.plug_radius + SOCKET.radial_clearance, rel=1e-12)
+    check_fit(replace(PLUG, radius=bore * (1.0 - 1e-9)), replace(SOCKET))
+    with pytest.raises(ValueError, match="PlugGeometry.radius"):
+        check_fit(replace(PLUG, radius=bore), replace(SOCKET))
+    check_fit(replace(PLUG, length=depth * (1.0 + 1e-9)), replace(SOCKET))
+    with pytest.raises(ValueError, match="PlugGeometry.length"):
+        check_fit(replace(PLUG, length=depth), replace(SOCKET))
 
 
 # ----------------------------------------------------------------------------- inertia
-def test_plug_inertia_is_what_mujoco_compiles():
-    plug = replace(PLUG)
-    model = build_plug(plug, replace(CONTACT)).compile()
-    body = model.body("dock")
+def test_plug_inertia_of_a_plain_cylinder_is_the_closed_form_and_mujoco_compiles_it():
+    """With a vanishing chamfer (1e-9°) the plug is a solid cylinder of radius r and length L:
+    centre of mass at L/2, inertia m(3r² + L²)/12 across and m r²/2 along the axis. The
+    compiled dock body carries exactly that (no inertia from the collision geoms)."""
+    plug = replace(PLUG, chamfer_angle_deg=1e-9)
+    m, r, L = plug.mass, plug.radius, plug.length
     mass, com, inertia = plug_inertia(plug)
-    assert body.mass[0] == pytest.approx(mass, rel=1e-12)
+    assert mass == m
+    np.testing.assert_allclose(com, [0.0, 0.0, L / 2], rtol=0, atol=1e-13)
+    # 1e-13 m, 1e-12: Gauss-Legendre is exact on these polynomials, 1e-9° of chamfer moves
+    # the centre of mass by ~1e-14 m
+    np.testing.assert_allclose(inertia, [m * (3 * r * r + L * L) / 12] * 2 + [m * r * r / 2], rtol=1e-12)
+    body = build_plug(plug, replace(CONTACT)).compile().body("dock")
+    assert body.mass[0] == pytest.approx(m, rel=1e-12)
     np.testing.assert_allclose(body.ipos, com, atol=1e-15)
     np.testing.assert_allclose(body.inertia, inertia, rtol=1e-12)
     np.testing.assert_allclose(body.iquat, [1, 0, 0, 0], atol=1e-12)

@@ -2,9 +2,8 @@
 files are part of the composed config, and both controllers dock the default scene.
 
 Docking assertions are the docking gate's (seated within 1 mm, inside the bore's
-0.4 mm clearance + 0.1 mm, tilt < 2°, peak axial force < 50 N) plus the steady push
-expected from the stiffness: k · 5 mm overshoot, with up to a few N from the torque-mode
-friction feed-forward pushing the (static) joints through their friction.
+0.4 mm clearance + 0.1 mm, tilt < 2°) plus the measured steady and peak forces, each
+with the reason for its width.
 """
 
 import numpy as np
@@ -50,10 +49,32 @@ def test_per_robot_gains_are_in_the_composed_config():
     assert make_cfg("robot=fr3", "controller.k=200").controller.k == 200.0
 
 
+#: measured steady axial force [N] per friction feed-forward mode (impedance, se3_lie):
+#: the spring k·5 mm = 1.5 N plus what the feed-forward pushes through the stuck joints —
+#: torque mode adds f·tanh(2τ/f) in the direction of the command, 0.8 N at the TCP here;
+#: velocity mode adds nothing at rest but leaves the joints stuck a little higher: 0.14 N
+STEADY_FORCE = {"torque": (2.320, 2.301), "velocity": (1.633, 1.646)}
+#: measured peak axial force [N]: in velocity mode the joints stick on the way in, the plug
+#: lands ~0.4 mm off the axis and the chamfer strikes the bore's edge harder
+PEAK_FORCE = {"torque": (24.07, 25.20), "velocity": (42.29, 42.28)}
+
+
+@pytest.mark.parametrize("friction_comp", ["torque", "velocity"])
 @pytest.mark.parametrize("controller", ["impedance", "se3_lie"])
-def test_fr3_docks_the_default_scene(tmp_path, controller):
+def test_fr3_docks_the_default_scene(tmp_path, controller, friction_comp):
+    """Both friction feed-forward modes seat the plug straight and pass the gate.
+
+    Tolerances: the gate's seat (1 mm, the bore's 0.4 mm clearance + 0.1 mm chamfer play,
+    2°); the steady force within 0.1 N of the measured value (4-6 %: the two laws differ by
+    0.02 N, and the friction-bound part of it depends on where the joints stuck); the peak,
+    a one-step contact impulse, within 15 % (the most round-off-sensitive number of a run)."""
     record = execute(
-        make_cfg("robot=fr3", f"controller={controller}", "task.progress=false"),
+        make_cfg(
+            "robot=fr3",
+            f"controller={controller}",
+            f"controller.friction_comp={friction_comp}",
+            "task.progress=false",
+        ),
         tmp_path,
         figures=False,
         echo=False,
@@ -63,31 +84,8 @@ def test_fr3_docks_the_default_scene(tmp_path, controller):
     assert record["seat_depth_error_m"] < 1e-3
     assert record["seat_lateral_error_m"] < 0.4e-3 + 1e-4
     assert record["seat_tilt_deg"] < 2.0
-    assert 1.0 < record["peak_axial_force_N"] < 50.0
-    assert 300.0 * 0.005 < record["steady_axial_force_N"] < 300.0 * 0.005 + 3.0
+    which = 0 if controller == "impedance" else 1
+    assert record["steady_axial_force_N"] == pytest.approx(STEADY_FORCE[friction_comp][which], abs=0.1)
+    assert record["steady_axial_force_N"] > 300.0 * 0.005  # never below the spring
+    assert record["peak_axial_force_N"] == pytest.approx(PEAK_FORCE[friction_comp][which], rel=0.15)
     assert record["lambda_fallback_steps"] == 0
-
-
-@pytest.mark.parametrize("controller", ["impedance", "se3_lie"])
-def test_fr3_seats_with_velocity_friction_feedforward(tmp_path, controller):
-    """``friction_comp=velocity`` also seats the plug straight and presses it home with
-    about k · 5 mm. (The docking gate still fails it on the peak force: without the
-    torque-following feed-forward the joints stick, the plug lands ~1 mm off the axis and
-    its chamfer hits the bore's edge at the approach speed, a one-step contact impulse of
-    80-105 N, above the 50 N budget.)"""
-    record = execute(
-        make_cfg(
-            "robot=fr3",
-            f"controller={controller}",
-            "controller.friction_comp=velocity",
-            "task.progress=false",
-        ),
-        tmp_path,
-        figures=False,
-        echo=False,
-    )
-    assert record["status"] == "ok"
-    assert record["seat_depth_error_m"] < 1e-3
-    assert record["seat_lateral_error_m"] < 0.4e-3 + 1e-4
-    assert record["seat_tilt_deg"] < 2.0
-    assert 300.0 * 0.005 < record["steady_axial_force_N"] < 300.0 * 0.005 + 3.0
