@@ -6,7 +6,7 @@ with the formula under test. The series are piecewise constant, so each statisti
 exact value; tolerances are round-off (``rel=1e-12``) unless a line says otherwise. Each
 case is built so that the likely wrong formula gives a different number (the maximum
 instead of the minimum, the mean instead of the RMS, the whole run instead of the steady
-window, the unprojected error, …): tools/mutate.py checks that they do.
+window, the unprojected error, …): benchmarks/mutation_score.py checks that they do.
 """
 
 from __future__ import annotations
