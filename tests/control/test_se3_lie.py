@@ -2,7 +2,7 @@
 the world → body conversions by finite differences, and closed-loop physics.
 
 Tolerances:
-* the controller against the literal law (numpy + lie.py, explicit inverses): 1e-9
+* the controller against the literal law (numpy, Pinocchio and lie's dexp, explicit inverses): 1e-9
   relative (both evaluate the same formulas; the literal one forms inverses);
 * central finite differences with step 1e-6 s: truncation ~1e-12 and round-off
   ~1e-10, so 1e-6 relative (a missing ω×ṗ term is an O(1) relative error);
@@ -63,20 +63,21 @@ def controller(sim, **kwargs):
 
 
 def literal_law(arm, ref, wrench, A, D, K, b, F_d):
-    """CONTROL_LAWS.md §3 transcribed with dense numpy and lie.py (explicit inverses)."""
+    """CONTROL_LAWS.md §3 transcribed with dense numpy, Pinocchio's SE(3) helpers and lie's dexp
+    (explicit inverses)."""
     R, p = arm.rot.copy(), arm.pos.copy()
     Rd, pd = ref.rot, ref.pos
-    Tt = lie.relative_pose(lie.se3_from_rp(R, p), lie.se3_from_rp(Rd, pd))
-    lam = lie.log6(Tt)
+    Tt = pin.SE3(R, p).actInv(pin.SE3(Rd, pd))  # T⁻¹T_d
+    lam = pin.log6(Tt).vector
     V = blockdiag(R.T) @ arm.twist
     V_d = blockdiag(Rd.T) @ ref.twist
     vd, wd = ref.twist[:3], ref.twist[3:]
     Vdot_d = np.r_[Rd.T @ (ref.accel[:3] - np.cross(wd, vd)), Rd.T @ ref.accel[3:]]
     F_body = blockdiag(R.T) @ wrench
-    Ad = lie.adjoint(Tt)
+    Ad = Tt.action
     V_tilde = Ad @ V_d - V
     lam_dot = lie.dexp_inv(lam) @ V_tilde
-    F_tilde = lie.coadjoint(Tt) @ F_d - F_body
+    F_tilde = Tt.dualAction @ F_d - F_body
     X, Xi, Xd = lie.dexp_all(lam, lam_dot)
     gamma = X.T @ F_tilde
     Xinv, Ainv = np.linalg.inv(X), np.linalg.inv(A)
@@ -84,7 +85,7 @@ def literal_law(arm, ref, wrench, A, D, K, b, F_d):
     K_P = Xinv @ Ainv @ Xinv.T @ K
     K_F = Xinv @ Ainv @ Xinv.T
     lam_ddot = -K_V @ lam_dot - K_P @ lam + K_F @ gamma
-    Vdot_ref = Ad @ Vdot_d - X @ lam_ddot + lie.ad(V_tilde) @ V - Xd @ lam_dot
+    Vdot_ref = Ad @ Vdot_d - X @ lam_ddot + pin.Motion(V_tilde).action @ V - Xd @ lam_dot
     # redundancy resolution
     w, v = arm.twist[3:], arm.twist[:3]
     Jb = blockdiag(R.T) @ arm.J
@@ -114,7 +115,7 @@ def random_case(arm, rng, angle):
     arm.update(q, v)
     axis = rng.standard_normal(3)
     ref = Reference()
-    ref.rot[:] = arm.rot @ lie.exp3(angle * axis / np.linalg.norm(axis))
+    ref.rot[:] = arm.rot @ pin.exp3(angle * axis / np.linalg.norm(axis))
     ref.pos[:] = arm.pos + rng.uniform(-0.1, 0.1, 3)
     ref.twist[:] = rng.uniform(-0.5, 0.5, 6)
     ref.accel[:] = rng.uniform(-2.0, 2.0, 6)
@@ -172,12 +173,14 @@ def test_lambda_space_quantities_are_consistent():
         X, Xd = ctrl.dexp, ctrl.dexp_dot
         assert close(X @ ctrl.lam_dot, ctrl.V_tilde, 1e-12)
         R, Rd = arm.rot, ref.rot
-        Tt = lie.relative_pose(lie.se3_from_rp(R, arm.pos), lie.se3_from_rp(Rd, ref.pos))
+        Tt = pin.SE3(R, arm.pos).actInv(pin.SE3(Rd, ref.pos))
         vd, wd = ref.twist[:3], ref.twist[3:]
         Vdot_d = np.r_[Rd.T @ (ref.accel[:3] - np.cross(wd, vd)), Rd.T @ ref.accel[3:]]
         V = blockdiag(R.T) @ arm.twist
         lhs = X @ ctrl.lam_ddot_ref + Xd @ ctrl.lam_dot
-        rhs = lie.adjoint(Tt) @ Vdot_d + lie.ad(ctrl.V_tilde) @ V - ctrl.Vdot_ref
+        rhs = (
+            Tt.action @ Vdot_d + pin.Motion(np.asarray(ctrl.V_tilde, dtype=float)).action @ V - ctrl.Vdot_ref
+        )
         assert close(lhs, rhs, 1e-10)
         # … and it is the impedance A·dṼ/dt + D·Ṽ + dexp⁻ᵀKλ = F̃ (default diagonal gains)
         A, D, K = ctrl.A, ctrl.D, ctrl.K
@@ -280,7 +283,7 @@ def _rotated_start(sim, axis, degrees, offset=(0.0, 0.0, 0.0)):
     ref = sim.waypoints.start
     axis = np.asarray(axis, float) / np.linalg.norm(axis)
     start = pin.SE3(
-        ref.rotation @ lie.exp3(math.radians(degrees) * axis), ref.translation + np.asarray(offset, float)
+        ref.rotation @ pin.exp3(math.radians(degrees) * axis), ref.translation + np.asarray(offset, float)
     )
     q = sim.scene.arm.solve_ik(start, sim.q0)
     sim.data.qpos[:] = q
@@ -329,7 +332,7 @@ def test_orientation_error_reaching_pi_fails_the_run(tmp_path, monkeypatch):
     base = simulate.prepare(make_cfg(*FREE_SPACE))
     r0 = base.waypoints.start.rotation  # plug down, roll of ik_guess (joint 7 near 0)
     # reference rolled by −90° so that +170° stays inside joint 7's range
-    quat = pin.Quaternion(r0 @ lie.exp3([0.0, 0.0, -math.pi / 2]))
+    quat = pin.Quaternion(r0 @ pin.exp3(np.array([0.0, 0.0, -math.pi / 2])))
     init_quat = f"[{quat.w},{quat.x},{quat.y},{quat.z}]"
     real_prepare = simulate.prepare
 

@@ -4,13 +4,14 @@ Conventions (fixed; the controllers depend on them)
 ---------------------------------------------------
 * Twists and wrenches are 6-vectors with the LINEAR part first:
   ``xi = [v; w]`` (v linear, w angular), ``F = [f; m]``.
-* Poses are 4x4 homogeneous matrices ``T = [[R, p], [0, 1]]``; the ``*_rp``
-  variants take/return the pair ``(R, p)``.
 * ``hat6(xi) = [[hat3(w), v], [0, 0]]``, ``exp6(xi) = expm(hat6(xi))`` and ``log6``
-  is its inverse for rotation angles below pi.
-* ``Ad_T = [[R, hat3(p) R], [0, R]]`` so that ``hat6(Ad_T xi) = T hat6(xi) T^-1``;
-  ``ad(xi) = [[hat3(w), hat3(v)], [0, hat3(w)]]`` so that
-  ``hat6(ad(xi) eta) = [hat6(xi), hat6(eta)]``.
+  is its inverse for rotation angles below pi; ``Ad_T = [[R, hat3(p) R], [0, R]]``,
+  ``ad(xi) = [[hat3(w), hat3(v)], [0, hat3(w)]]``. These general helpers are
+  Pinocchio's (same conventions: ``pin.exp6``, ``pin.log6``, ``pin.SE3.action``,
+  ``pin.Motion.action``, …; see :mod:`.se3`); this package keeps what no library has
+  or what measures better: dexp with its inverse and analytic time derivative
+  (1e-16 against Pinocchio's 1e-7 at docking-size angles), the scalar coefficient
+  kernels and the log3 kernel the controller calls on Python floats.
 * ``dexp(lam)`` is the RIGHT-trivialised differential of exp (the "left Jacobian"
   J_l of SE(3)):  d/dt Exp(lam(t)) = hat6(dexp(lam) lam_dot) Exp(lam), i.e.
   ``dexp(lam) = sum_k ad(lam)^k / (k+1)!``.  ``dexp_inv`` is its inverse and
@@ -24,34 +25,17 @@ With theta = |w|, x = theta^2 and the scalar functions
 
 the SO(3) quantities are
 
-    exp3(w)  = cos(theta) I + hat3(a w) + b w w^T
     J(w)     = I + b hat3(w) + c hat3(w)^2      = a I + hat3(b w) + c w w^T
     J(w)^-1  = I - hat3(w)/2 + e hat3(w)^2      = g I - hat3(w)/2 + e w w^T
 
 with g = (theta/2) cot(theta/2) and e = (1 - g)/theta^2.  For a scalar function f(theta)
 
-Modules: :mod:`.series` (scalar coefficient kernels, Taylor switches), :mod:`.so3`,
-:mod:`.se3`, :mod:`.dexp`. The names below are the package's public API.
+Modules: :mod:`.series` (scalar coefficient kernels, Taylor switches), :mod:`.so3` (log3
+kernel, SO(3) Jacobians), :mod:`.se3` (the π domain check), :mod:`.dexp`. The names below are the package's public API.
 """
 
 from compliant_docking.control.lie.dexp import dexp, dexp_all, dexp_dot, dexp_inv
-from compliant_docking.control.lie.se3 import (
-                                               ad,
-                                               adjoint,
-                                               adjoint_inv,
-                                               adjoint_rp,
-                                               check_rotation_domain,
-                                               coadjoint,
-                                               exp6,
-                                               exp6_rp,
-                                               hat6,
-                                               log6,
-                                               log6_rp,
-                                               relative_pose,
-                                               se3_from_rp,
-                                               se3_inverse,
-                                               vee6,
-)
+from compliant_docking.control.lie.se3 import check_rotation_domain
 from compliant_docking.control.lie.series import (
                                                PI_MARGIN,
                                                TAYLOR_THETA_0,
@@ -64,13 +48,9 @@ from compliant_docking.control.lie.series import (
                                                trig_terms,
 )
 from compliant_docking.control.lie.so3 import (
-                                               exp3,
-                                               hat3,
-                                               log3,
                                                log3_list,
                                                so3_left_jacobian,
                                                so3_left_jacobian_inv,
-                                               vee3,
 )
 
 __all__ = [
@@ -78,27 +58,9 @@ __all__ = [
     "TAYLOR_THETA_1",
     "TAYLOR_THETA_2",
     "PI_MARGIN",
-    "hat3",
-    "vee3",
-    "exp3",
-    "log3",
     "so3_left_jacobian",
     "so3_left_jacobian_inv",
-    "hat6",
-    "vee6",
-    "exp6",
-    "exp6_rp",
-    "log6",
-    "log6_rp",
     "check_rotation_domain",
-    "se3_from_rp",
-    "se3_inverse",
-    "relative_pose",
-    "adjoint",
-    "adjoint_rp",
-    "adjoint_inv",
-    "coadjoint",
-    "ad",
     "dexp",
     "dexp_inv",
     "dexp_dot",

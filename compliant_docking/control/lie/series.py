@@ -39,9 +39,9 @@ integer ratios that Python folds into correctly rounded constants).
 
 Domain
 ------
-``log3``/``log6`` return a rotation vector of norm in [0, pi].  The SE(3) impedance is
-only defined for |lam_rot| < pi (the logarithm is not unique at pi); call ``log6`` with
-``check=True`` (or ``check_rotation_domain``) to raise a ValueError there.
+The log3 kernel returns a rotation vector of norm in [0, pi].  The SE(3) impedance is
+only defined for |lam_rot| < pi (the logarithm is not unique at pi);
+``check_rotation_domain`` raises a ValueError there.
 
 Performance
 -----------

@@ -1,7 +1,9 @@
-"""SO(3): hat/vee, exp/log (robust near 0 and π) and the left Jacobian with its inverse.
+"""SO(3): the logarithm kernel of the SE(3) impedance (robust near 0 and π) and the left
+Jacobian with its inverse (the SO(3) blocks of dexp).
 
 J(w) = a I + hat3(b w) + c w wᵀ and J(w)⁻¹ = g I − hat3(w)/2 + e w wᵀ with the coefficient
-functions of :mod:`compliant_docking.control.lie.series`.
+functions of :mod:`compliant_docking.control.lie.series`. The general helpers (hat/vee,
+exp/log as matrices) are Pinocchio's: ``pin.skew``, ``pin.unSkew``, ``pin.exp3``, ``pin.log3``.
 """
 
 from __future__ import annotations
@@ -34,38 +36,6 @@ def jinv_block(g, e, w0, w1, w2):
     he = 0.5 * e
     return block3(g, -0.5 * w0, -0.5 * w1, -0.5 * w2, w0, w1, w2, he * w0, he * w1, he * w2)
 
-
-
-def hat3(w):
-    """Skew matrix hat3(w) with hat3(w) y = w x y."""
-    w0, w1, w2 = floats(w, 3)
-    return np.array((0.0, -w2, w1, w2, 0.0, -w0, -w1, w0, 0.0)).reshape(3, 3)
-
-
-def vee3(W):
-    """Inverse of ``hat3``: the vector of the skew part (W - W^T)/2."""
-    W = np.asarray(W, dtype=float)
-    return 0.5 * np.array((W[2, 1] - W[1, 2], W[0, 2] - W[2, 0], W[1, 0] - W[0, 1]))
-
-
-def exp3_entries(w0, w1, w2):
-    x = w0 * w0 + w1 * w1 + w2 * w2
-    t = _sqrt(x)
-    if t < TAYLOR_THETA_0:
-        s = co = omc = 0.0
-    else:
-        s, co, omc = trig_terms(t)
-    a, b, c, _, _ = coef0(t, x, s, co, omc)
-    cth = 1.0 - b * x  # = cos(theta), also in the Taylor branch
-    return block3(cth, a * w0, a * w1, a * w2, w0, w1, w2,
-                0.5 * b * w0, 0.5 * b * w1, 0.5 * b * w2), a, b, c
-
-
-def exp3(w):
-    """Rodrigues: exp3(w) = cos(theta) I + (sin theta/theta) hat3(w) + b w w^T."""
-    w0, w1, w2 = floats(w, 3)
-    R = exp3_entries(w0, w1, w2)[0]
-    return np.array(R).reshape(3, 3)
 
 
 def log3_list(r00, r01, r02, r10, r11, r12, r20, r21, r22):
@@ -103,17 +73,6 @@ def log3_list(r00, r01, r02, r10, r11, r12, r20, r21, r22):
     if n0 * y0 + n1 * y1 + n2 * y2 < 0.0:
         f = -f
     return f * n0, f * n1, f * n2, t
-
-
-def log3(R):
-    """SO(3) logarithm: rotation vector w with exp3(w) = R and |w| in [0, pi].
-
-    Robust near 0 and near pi (see ``log3_list``).  At exactly pi either of the two
-    equivalent vectors +-pi n may be returned.
-    """
-    R = np.asarray(R, dtype=float)
-    w0, w1, w2, _ = log3_list(*R.reshape(-1).tolist())
-    return np.array((w0, w1, w2))
 
 
 def so3_left_jacobian(w):
