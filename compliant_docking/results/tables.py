@@ -97,27 +97,37 @@ def comparison_table(df: pd.DataFrame, keys: list[str] | None = None) -> pd.Data
     in display units (mm, deg, N, %); the ``success`` section holds ``jobs``,
     ``failed`` (status failed), ``docked`` (success true) and ``success rate``
     (docked / jobs). Columns keep the order in which configurations first appear.
+    One pandas groupby over the configuration labels (benchmarks/comparison_table.py).
     """
     labels = configuration_labels(df, keys)
-    order = list(dict.fromkeys(labels))
+    metrics = compared()
     index = pd.MultiIndex.from_tuples(
-        [(m.section, m.heading) for m in compared()]
+        [(m.section, m.heading) for m in metrics]
         + [(SUCCESS_SECTION, name) for name in ("jobs", "failed", "docked", "success rate")],
         names=["section", "metric"],
     )
-    table = pd.DataFrame(index=index, columns=order, dtype=float)
-    for name in order:
-        group = df[labels == name]
-        for row in compared():
-            values = pd.to_numeric(group.get(row.key), errors="coerce") if row.key in group else None
-            mean = values.mean() if values is not None and values.notna().any() else np.nan
-            table.loc[(row.section, row.heading), name] = mean * row.scale
-        docked = int((group["success"] == True).sum()) if "success" in group else 0  # noqa: E712
-        table.loc[(SUCCESS_SECTION, "jobs"), name] = len(group)
-        table.loc[(SUCCESS_SECTION, "failed"), name] = int((group["status"] == "failed").sum())
-        table.loc[(SUCCESS_SECTION, "docked"), name] = docked
-        table.loc[(SUCCESS_SECTION, "success rate"), name] = docked / len(group) if len(group) else np.nan
-    return table
+    if not len(df):
+        return pd.DataFrame(index=index, columns=[], dtype=float)
+    by = labels.to_numpy()
+    values = pd.DataFrame(
+        {m.key: pd.to_numeric(df[m.key], errors="coerce") if m.key in df else np.nan for m in metrics},
+        index=df.index,
+    )
+    means = values.groupby(by, sort=False).mean() * [m.scale for m in metrics]  # NaN: no value
+    outcome = pd.DataFrame(
+        {
+            "jobs": 1.0,
+            "failed": (df["status"] == "failed").astype(float),
+            "docked": (df["success"] == True).astype(float) if "success" in df else 0.0,  # noqa: E712
+        },
+        index=df.index,
+    )
+    totals = outcome.groupby(by, sort=False).sum()
+    totals["success rate"] = totals["docked"] / totals["jobs"]
+    table = pd.concat([means, totals], axis=1).T
+    table.index = index
+    table.columns.name = None
+    return table.astype(float)
 
 
 def _cell(value, metric: str) -> str:
