@@ -21,6 +21,7 @@ This module is imported by the launching process and by every worker: keep it li
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Any
 
@@ -40,7 +41,8 @@ def expected_jobs(config: DictConfig) -> int | None:
     try:
         sweeper = config.hydra.sweeper
         if "n_trials" in sweeper and "draws" in sweeper:  # compliant_docking.tune
-            return int(sweeper.n_trials) * _combinations(sweeper.draws, [])
+            count = _combinations(sweeper.draws, [])
+            return None if count is None else int(sweeper.n_trials) * count
         if not str(sweeper.get("_target_", "")).endswith("BasicSweeper"):
             return None
         return _combinations(sweeper.get("params") or {}, list(config.hydra.overrides.task))
@@ -48,8 +50,13 @@ def expected_jobs(config: DictConfig) -> int | None:
         return None
 
 
-def _combinations(params, arguments: list[str]) -> int:
-    from hydra._internal.core_plugins.basic_sweeper import BasicSweeper
+def _combinations(params, arguments: list[str]) -> int | None:
+    """The basic sweeper's rule, through Hydra's public override parser: ``params`` then
+    ``arguments``, the last one of each key wins, and the jobs are the product of the
+    number of values of each discrete sweep (``a,b``, ``choice``, ``range``). None for an
+    interval sweep (which the basic sweeper refuses); ``glob`` (which needs the config
+    loader) raises. tests/sweep/test_callback.py checks the count against Hydra's own
+    (private) ``BasicSweeper.split_arguments``."""
     from hydra.core.override_parser.overrides_parser import OverridesParser
 
     def flat(node, prefix: str = "") -> list[str]:  # a.b.c=v, also when given nested
@@ -58,9 +65,15 @@ def _combinations(params, arguments: list[str]) -> int:
             out += flat(v, f"{prefix}{k}.") if hasattr(v, "items") else [f"{prefix}{k}={v}"]
         return out
 
-    lines = flat(params) + arguments
-    overrides = OverridesParser.create().parse_overrides(lines)
-    return sum(len(batch) for batch in BasicSweeper.split_arguments(overrides, None))
+    values: dict[str, int] = {}
+    for override in OverridesParser.create().parse_overrides(flat(params) + arguments):
+        if not override.is_sweep_override():
+            values[override.get_key_element()] = 1
+        elif override.is_discrete_sweep():
+            values[override.get_key_element()] = sum(1 for _ in override.sweep_string_iterator())
+        else:
+            return None
+    return math.prod(values.values())
 
 
 def _workers(config: DictConfig) -> str:

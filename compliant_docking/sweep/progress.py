@@ -10,6 +10,7 @@ This module is imported by the launching process and every job: keep it light.
 
 from __future__ import annotations
 
+import os
 import threading
 from pathlib import Path
 
@@ -17,6 +18,10 @@ from compliant_docking.run.rundir import METRICS_FILE, read_metrics
 
 #: how often :class:`ProgressWatcher` looks for finished jobs [s]
 POLL_INTERVAL_S = 2.0
+#: the sweep's count of finished jobs (:func:`next_count`), hidden in the sweep directory
+#: while the sweep runs
+COUNT_FILE = ".finished_jobs"
+COUNT_WIDTH = 20
 
 
 def emit(text: str) -> None:
@@ -32,35 +37,54 @@ def display(path: Path) -> str:
         return str(path)
 
 
-def finished_rank(out_dir: Path, sweep_dir: Path, depth: int = 1) -> int:
-    """The job's place among the finished jobs of the sweep: how many metrics.json files
-    ``depth`` levels below ``sweep_dir`` were written no later than its own (by
-    modification time, then path). Unlike a plain count, two workers finishing at the
-    same moment still get different numbers."""
+def reset_count(sweep_dir: Path) -> None:
+    """Start the sweep's count of finished jobs at 0 (the launching process, before any job)."""
+    path = Path(sweep_dir) / COUNT_FILE
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(f"{0:<{COUNT_WIDTH}d}\n")
 
-    def key(path: Path) -> tuple[int, str]:
-        try:
-            return path.stat().st_mtime_ns, str(path)
-        except OSError:  # replaced while we looked
-            return 0, str(path)
 
-    own = key(Path(out_dir) / METRICS_FILE)
-    return sum(1 for p in Path(sweep_dir).glob("*/" * depth + METRICS_FILE) if key(p) <= own)
+def remove_count(sweep_dir: Path) -> None:
+    """Remove the count file (the sweep is over)."""
+    Path(sweep_dir, COUNT_FILE).unlink(missing_ok=True)
+
+
+def next_count(sweep_dir: Path) -> int | None:
+    """This job's number among the finished jobs of the sweep: 1, 2, … in the order the
+    jobs finish, each number given once even when two workers finish together.
+
+    One exclusive lock (``flock``) on ``<sweep>/.finished_jobs`` around reading the count
+    and writing it plus one: constant time per job, whatever the sweep's size, and safe
+    across processes (and across machines on a file system with POSIX locks, e.g. NFSv4).
+    None when the file cannot be locked (no count is printed rather than a wrong one).
+    """
+    try:
+        import fcntl
+
+        fd = os.open(Path(sweep_dir) / COUNT_FILE, os.O_RDWR | os.O_CREAT, 0o644)
+    except (ImportError, OSError):
+        return None
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX)  # released by close(), also if the process dies
+        count = int(os.pread(fd, COUNT_WIDTH, 0).decode().strip() or 0) + 1
+        os.pwrite(fd, f"{count:<{COUNT_WIDTH}d}".encode(), 0)  # fixed width: no truncation
+        return count
+    except (OSError, ValueError):
+        return None
+    finally:
+        os.close(fd)
 
 
 def job_line(out_dir: Path, sweep_dir: Path, total: int | None, done: int | None = None) -> str:
     """``[3/6] 2_controller=hqp,robot=fr3 · ok · docked · peak 12.3 N · 4.2 s``.
 
-    ``done``: the running count; by default the job's rank among the finished jobs.
+    ``done``: the running count; by default the next number of :func:`next_count`.
     """
     record, problem = read_metrics(out_dir)
-    try:
-        depth = len(out_dir.resolve().relative_to(sweep_dir).parts)
-    except ValueError:
-        depth = 1
     if done is None:
-        done = finished_rank(out_dir, sweep_dir, depth)
-    count = f"[{done}/{total}]" if total else f"[{done} done]"
+        done = next_count(sweep_dir)
+    shown = "?" if done is None else done
+    count = f"[{shown}/{total}]" if total else f"[{shown} done]"
     if record is None:
         return f"{count} {out_dir.name} · {problem}"
     status = record.get("status")

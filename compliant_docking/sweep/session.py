@@ -19,7 +19,7 @@ from contextvars import ContextVar
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from compliant_docking.sweep.progress import ProgressWatcher
+from compliant_docking.sweep.progress import ProgressWatcher, remove_count, reset_count
 from compliant_docking.sweep.summary import SweepOutcome, summarise
 
 _CURRENT: ContextVar[SweepSession | None] = ContextVar("compliant_docking_sweep", default=None)
@@ -67,6 +67,7 @@ class SweepSession:
         """The sweep starts (the callback's ``on_multirun_start``)."""
         self.sweep_dir, self.total = Path(sweep_dir), total
         self.started, self.independent_jobs, self.outcome = time.perf_counter(), independent_jobs, None
+        reset_count(self.sweep_dir)  # the jobs number themselves 1, 2, … as they finish
 
     def preload(self, *, figures: bool) -> None:
         """Import what the summary at the end needs — pandas, and matplotlib when it draws
@@ -110,6 +111,7 @@ class SweepSession:
         a failed job makes the exit status 1)."""
         self.stop_watcher()
         self._join_preload()
+        remove_count(Path(sweep_dir))
         known = self.sweep_dir is not None and Path(sweep_dir) == self.sweep_dir
         self.outcome = summarise(
             sweep_dir,

@@ -5,7 +5,6 @@ from __future__ import annotations
 import json
 import os
 import re
-import subprocess
 import sys
 import warnings
 from pathlib import Path
@@ -17,7 +16,7 @@ from hydra.core.config_store import ConfigStore
 from hydra.core.global_hydra import GlobalHydra
 from omegaconf import OmegaConf
 
-from compliant_docking import CONF_DIR, REPO_ROOT
+from compliant_docking import CONF_DIR
 from compliant_docking.config import register_schemas
 from compliant_docking.results import RunSkippedWarning, load_runs
 from compliant_docking.run import provenance
@@ -25,15 +24,6 @@ from compliant_docking.sweep import launchers
 from compliant_docking.sweep.launchers import describe, is_submitit
 from compliant_docking.sweep.progress import ProgressWatcher
 
-#: 3 short jobs (free space, 2-2.5 s simulated); the third fails (a zero duration)
-JOBS = (
-    "trajectory=hold",
-    "trajectory.duration=1,1.5,0",
-    "target=none",
-    "task.init_pos=[0.55,0,0.35]",
-    "task.settle_time=1",
-    "task.progress=false",
-)
 #: keys that may differ between two launches of one config: timing, start time, and the
 #: provenance of the process (same machine here, but a commit could land in between)
 VARYING = provenance.VOLATILE_KEYS | {"git_commit", "git_dirty"}
@@ -47,45 +37,25 @@ def _compose(*overrides: str):
         return compose("config", overrides=list(overrides), return_hydra_config=True)
 
 
-def _start_sweep(sweep: Path, *launcher: str) -> subprocess.Popen:
-    env = {**os.environ, "PYTHONUNBUFFERED": "1"}
-    return subprocess.Popen(
-        [
-            sys.executable,
-            "-m",
-            "compliant_docking",
-            "-m",
-            *JOBS,
-            f"hydra.sweep.dir={sweep}",
-            "hydra.callbacks.sweep.figures=false",
-            *launcher,
-        ],
-        cwd=REPO_ROOT,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        env=env,
-    )
-
-
 def _files(job_dir: Path) -> set[str]:
     return {str(p.relative_to(job_dir)) for p in job_dir.rglob("*") if p.is_file()}
 
 
-def test_the_default_pool_hydras_joblib_and_submitit_local_give_the_same_outputs(tmp_path):
+def test_the_default_pool_hydras_joblib_and_submitit_local_give_the_same_outputs(failing_sweeps):
     """Same job directories, metrics (timing and start time aside), time series, failure
     records, summary rows, end-of-sweep summary and exit status (1: a job failed);
     submitit's logs stay in .submitit/. The default launcher (sweep/pool.py) sends each
     job the config composed in the launching process; Hydra's joblib launcher composes it
-    again in the worker, submitit in the job's own process: the jobs must not tell."""
-    runs = {
-        "pool": _start_sweep(tmp_path / "pool", "hydra.launcher.n_jobs=2"),
-        "joblib": _start_sweep(tmp_path / "joblib", "hydra/launcher=joblib", "hydra.launcher.n_jobs=2"),
-        "submitit": _start_sweep(tmp_path / "submitit", "hydra/launcher=submitit_local"),
-    }
-    out = {name: proc.communicate(timeout=300) for name, proc in runs.items()}
-    for name, proc in runs.items():
-        assert proc.returncode == 1, (name, out[name][1][-3000:])
+    again in the worker, submitit in the job's own process: the jobs must not tell. The
+    pool run is the shared failing sweep (tests/sweep/conftest.py), which also draws the
+    comparison figures (a directory, not compared here)."""
+    for name in ("joblib", "submitit"):  # side by side with the pool run if it is not done yet
+        failing_sweeps.start(name)
+    runs = {name: failing_sweeps.result(name) for name in ("pool", "joblib", "submitit")}
+    tmp_path = runs["pool"].sweep_dir.parent
+    out = {name: (run.stdout, run.stderr) for name, run in runs.items()}
+    for name, run in runs.items():
+        assert run.returncode == 1, (name, run.stderr[-3000:])
         stdout = out[name][0]
         assert "sweep finished in" in stdout and "3 jobs: 2 succeeded, 1 failed" in stdout
         assert "FAILED 2_" in stdout and "trajectory.duration must be > 0" in stdout
@@ -98,7 +68,7 @@ def test_the_default_pool_hydras_joblib_and_submitit_local_give_the_same_outputs
     assert "PoolLauncher(2 workers) is launching 3 jobs" in out["pool"][0]
 
     jobs = {
-        name: sorted(p for p in (tmp_path / name).iterdir() if p.is_dir() and not p.name.startswith("."))
+        name: sorted(p for p in (tmp_path / name).iterdir() if p.is_dir() and p.name[0].isdigit())
         for name in runs
     }
     assert (
