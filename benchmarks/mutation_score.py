@@ -43,6 +43,7 @@ COMPLIANCE = "compliant_docking/control/hqp/compliance.py"
 BASE = "compliant_docking/control/base.py"
 PROVENANCE = "compliant_docking/run/provenance.py"
 RUNNER = "compliant_docking/run/runner.py"
+TABLES = "compliant_docking/results/tables.py"
 
 METRIC_TESTS = ("tests/evaluation/test_docking.py", "tests/run/test_runner.py")
 GATE_TESTS = ("tests/evaluation/test_docking.py", "tests/run/test_runner.py")
@@ -58,6 +59,7 @@ LAW_TESTS = (
 )
 PROVENANCE_TESTS = ("tests/run/test_provenance.py",)
 CLI_TESTS = ("tests/run/test_cli.py",)
+RESULTS_TESTS = ("tests/results/test_load.py",)
 
 
 @dataclass(frozen=True)
@@ -467,6 +469,22 @@ MUTATIONS = (
         "commit = oid[::-1]",
         "git_commit not HEAD",
         PROVENANCE_TESTS,
+    ),
+    Mutation(
+        "R2",
+        TABLES,
+        "means = values.groupby(by, sort=False).mean()",
+        "means = values.groupby(by, sort=False).median()",
+        "comparison table: median instead of the mean",
+        RESULTS_TESTS,
+    ),
+    Mutation(
+        "R3",
+        TABLES,
+        'totals["success rate"] = totals["docked"] / totals["jobs"]',
+        'totals["success rate"] = totals["docked"] / (totals["jobs"] - totals["failed"])',
+        "success rate over the jobs that did not fail",
+        RESULTS_TESTS,
     ),
     Mutation(
         "R1",

@@ -6,6 +6,7 @@ import json
 import warnings
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import pytest
 from omegaconf import OmegaConf
@@ -173,12 +174,18 @@ def test_parse_override_forms():
 
 
 def test_comparison_pools_repeats_and_counts_outcomes(tmp_path):
+    """Four seeds of one configuration (the last failed) and one failed job of another:
+    metrics are the mean over the jobs that have them (10, 40, 90 N → 46.67 N, where the
+    median would be 40 N); the success rate is docked / all jobs (3/4, not 3/3)."""
     for seed in range(4):
+        failed = seed == 3
         fake_job(
             tmp_path / f"{seed}_a",
             ["controller=impedance", f"task.misalignment.seed={seed}"],
-            success=seed < 3,
-            peak_axial_force_N=10.0 * (seed + 1),
+            status="failed" if failed else "ok",
+            error="diverged" if failed else None,
+            success=not failed,
+            peak_axial_force_N=None if failed else 10.0 * (seed + 1) ** 2,
         )
     fake_job(
         tmp_path / "4_b",
@@ -193,13 +200,19 @@ def test_comparison_pools_repeats_and_counts_outcomes(tmp_path):
     assert configuration_keys(df) == ["controller"]  # the seed repeats a configuration
     table = comparison_table(df)
     assert list(table.columns) == ["impedance", "hqp"]
-    assert table.loc[("contact safety", "peak axial force [N]"), "impedance"] == pytest.approx(25.0)
+    assert table.loc[("contact safety", "peak axial force [N]"), "impedance"] == pytest.approx(140.0 / 3)
     assert table.loc[("tracking accuracy", "position RMS [mm]"), "impedance"] == pytest.approx(1.0)
+    assert (
+        table.loc[("success", "jobs"), "impedance"] == 4
+        and table.loc[("success", "failed"), "impedance"] == 1
+    )
     assert table.loc[("success", "success rate"), "impedance"] == pytest.approx(0.75)
     assert table.loc[("success", "failed"), "hqp"] == 1
+    assert table.loc[("success", "success rate"), "hqp"] == 0.0
+    assert np.isnan(table.loc[("contact safety", "peak axial force [N]"), "hqp"])  # no value: n/a
     text = comparison_markdown(table)
     assert "**contact safety**" in text and "75 %" in text and "n/a" in text
-    assert counts(df).line() == "5 jobs: 4 succeeded, 1 failed, 3 docked"
+    assert counts(df).line() == "5 jobs: 3 succeeded, 2 failed, 3 docked"
 
 
 def test_write_summary_and_report_command(tmp_path, capsys):
