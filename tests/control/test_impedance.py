@@ -21,9 +21,12 @@ def test_constant_push_settles_at_force_over_stiffness(physics):
     end = sim.scene.arm.tcp_placement(sim.data.qpos)
     displacement = end.translation - start.translation
     expected = force / float(sim.cfg.controller.k)
-    assert np.linalg.norm(displacement - expected) < 0.02 * np.linalg.norm(expected)
-    # a force at the TCP produces no rotation
-    assert np.linalg.norm(pin.log3(start.rotation.T @ end.rotation)) < 1e-3
+    # 0.5 %: with m, d, k = 10, 80, 50 the slow pole is −0.68 /s, so 0.11 % of F/k is still
+    # to come at 10 s (measured 0.13 %)
+    assert np.linalg.norm(displacement - expected) < 0.005 * np.linalg.norm(expected)
+    # a force at the TCP produces no rotation (measured 2.6e-6 rad: the first-step kick,
+    # decayed; tests/control/test_transients.py)
+    assert np.linalg.norm(pin.log3(start.rotation.T @ end.rotation)) < 1e-5
 
 
 @pytest.mark.parametrize("controller", ["impedance", "se3_lie"])
@@ -38,17 +41,20 @@ def test_constant_moment_settles_at_moment_over_rotational_stiffness(controller)
     end = sim.scene.arm.tcp_placement(sim.data.qpos)
     rotation = pin.log3(end.rotation @ start.rotation.T)  # world axes
     expected = moment / k_rot
-    assert np.linalg.norm(rotation - expected) < 0.03 * np.linalg.norm(expected)
-    assert np.linalg.norm(end.translation - start.translation) < 1e-4
+    # 0.1 %: the rotation is critically damped (m_rot, d_rot, k_rot = 1, 10, 25: a double pole
+    # at −5 /s, 2e-8 left at 4 s); measured 4.4e-5, the change of the arm over 1 deg
+    assert np.linalg.norm(rotation - expected) < 1e-3 * np.linalg.norm(expected)
+    assert np.linalg.norm(end.translation - start.translation) < 1e-4  # measured 2.4e-5 m
 
 
-def test_without_force_feedback_the_arm_is_stiffer_than_k():
-    """Feedback off: the arm's own task inertia replaces the commanded one, so F/k no longer holds.
-
+def test_without_force_feedback_a_push_no_longer_settles_at_f_over_k():
+    """Feedback off: the arm's own task inertia Λ replaces the commanded one, and the push
+    settles where K e = W Λ⁻¹ w: along x here about 7× F/k (Λ⁻¹ is large along the arm's
+    light directions), and with the large motion the linear estimate no longer holds.
     This is what makes the push test above able to fail."""
     sim = prepare(make_cfg(*FREE_SPACE, "trajectory.duration=10", "controller.use_force_feedback=false"))
     start = sim.scene.arm.tcp_placement(sim.q0)
     push_at_tcp(sim, force=(2.0, 0.0, 0.0))
     sim.run()
     dx = sim.scene.arm.tcp_placement(sim.data.qpos).translation[0] - start.translation[0]
-    assert abs(dx - 2.0 / float(sim.cfg.controller.k)) > 0.1 * 2.0 / float(sim.cfg.controller.k)
+    assert dx > 3.0 * 2.0 / float(sim.cfg.controller.k)  # measured 6.9× F/k

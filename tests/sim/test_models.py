@@ -25,9 +25,10 @@ def test_mass_matrix_and_bias_match_mujoco(robot, physics):
         mujoco.mj_forward(model, data)
         mujoco.mj_fullM(model, data, M_mj)
         arm.update(q, v)
+        # the same model in two libraries: equal to round-off (entries up to ~10 kg·m², N·m)
         assert np.max(np.abs(arm.M - M_mj)) < 1e-9
         assert np.max(np.abs(arm.h - data.qfrc_bias)) < 1e-9
-        # the TCP in Pinocchio is the tool's tcp site in MuJoCo
+        # the TCP in Pinocchio is the tool's tcp site in MuJoCo (positions ~1 m: round-off)
         assert np.allclose(arm.pos, data.site_xpos[scene.tcp_site], atol=1e-12)
         assert np.allclose(arm.rot, data.site_xmat[scene.tcp_site].reshape(3, 3), atol=1e-12)
 
@@ -45,5 +46,7 @@ def test_jdot_v_matches_finite_difference():
         J.append(arm.J.copy())
     arm.update(q, v)
     fd = (J[1] - J[0]) @ v / (2 * h)
+    # central differences with h = 1e-6: truncation ~h² = 1e-12, round-off ~eps/h = 2e-10;
+    # 1e-6 leaves room, while a missing or wrong term of J̇v (order |v|² ≈ 1) fails
     assert np.allclose(arm.Jdot_v, fd, atol=1e-6)
     assert np.allclose(arm.twist, arm.J @ v, atol=1e-12)
