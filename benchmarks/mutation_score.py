@@ -278,6 +278,14 @@ MUTATIONS = (
         "a NaN passes the gate",
         GATE_TESTS,
     ),
+    Mutation(
+        "G8",
+        DOCKING,
+        "        elif seat.key_yaw_deg > key_yaw_limit_deg:",
+        "        elif seat.key_yaw_deg > 3 * key_yaw_limit_deg:",
+        "key-yaw tolerance × 3",
+        GATE_TESTS,
+    ),
     # ---------------------------------------------------------------- tracking gate
     Mutation(
         "T1",

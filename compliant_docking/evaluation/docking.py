@@ -224,7 +224,7 @@ def docking_gate(
         elif value > limit:
             failures.append(f"{label} {value:.4g} {unit} > {limit:g} {unit}")
     if key_yaw_limit_deg is not None:
-        if seat.key_yaw_deg is None:
+        if seat.key_yaw_deg is None or not np.isfinite(seat.key_yaw_deg):  # fail closed
             failures.append("key yaw not available (non-finite or no data)")
         elif seat.key_yaw_deg > key_yaw_limit_deg:
             failures.append(

@@ -19,6 +19,7 @@ import numpy as np
 import pandas as pd
 import pinocchio as pin
 import pytest
+from omegaconf import OmegaConf
 
 from compliant_docking.evaluation.docking import (
     SeatState,
@@ -274,22 +275,29 @@ GATE_ITEMS = {
     "seat lateral error": ("lateral_tolerance_m", "seat", "lateral_error_m"),
     "plug tilt": ("tilt_tolerance_deg", "seat", "tilt_deg"),
     "peak axial force": ("peak_force_budget_N", "metrics", "peak_axial_force_N"),
+    "key yaw": ("key_yaw_tolerance_deg", "seat", "key_yaw_deg"),
 }
-#: the shipped tolerances (conf/task/docking.yaml)
-GATE = make_cfg().task.gate
+#: the shipped tolerances (conf/task/docking.yaml); the key-yaw one is null there (a keyed
+#: interface's default is its yaw play + 0.1°, tests/sim/test_keyed.py): 2.44° as for a
+#: square key with 2.34° of play
+GATE = OmegaConf.merge(make_cfg().task.gate, {"key_yaw_tolerance_deg": 2.44})
 
 
 def _judge(item: str | None = None, value=None, gate=GATE) -> list[str]:
-    """The gate with every item at half its tolerance, except ``item`` at ``value``."""
-    seat = SeatState(*(0.5 * gate[GATE_ITEMS[i][0]] for i in list(GATE_ITEMS)[:3]), seated_time_s=3.0)
-    metrics = dict.fromkeys(DOCKING_KEYS, 1.0) | {"peak_axial_force_N": 0.5 * gate.peak_force_budget_N}
+    """The gate of a keyed interface with every item at half its tolerance, except ``item``
+    at ``value``."""
+    half = {field: 0.5 * gate[tolerance] for tolerance, where, field in GATE_ITEMS.values()}
+    seat = SeatState(
+        half["depth_error_m"], half["lateral_error_m"], half["tilt_deg"], 3.0, key_yaw_deg=half["key_yaw_deg"]
+    )
+    metrics = dict.fromkeys(DOCKING_KEYS, 1.0) | {"peak_axial_force_N": half["peak_axial_force_N"]}
     if item is not None:
         _, where, field = GATE_ITEMS[item]
         if where == "seat":
             seat = replace(seat, **{field: value})
         else:
             metrics[field] = value
-    return docking_gate(seat, metrics, gate)
+    return docking_gate(seat, metrics, gate, key_yaw_limit_deg=gate.key_yaw_tolerance_deg)
 
 
 def test_gate_items_are_the_configured_tolerances():
@@ -316,12 +324,15 @@ def test_a_missing_or_non_finite_gate_value_fails(item, value):
 
 
 def test_every_failing_item_is_listed_with_its_value_and_limit():
-    seat = SeatState(2e-3, 3e-3, 4.0, None)
+    seat = SeatState(2e-3, 3e-3, 4.0, None, key_yaw_deg=5.0)
     metrics = dict.fromkeys(DOCKING_KEYS) | {"peak_axial_force_N": 80.0}
-    failures = docking_gate(seat, metrics, SimpleNamespace(**GATE))
-    assert failures == [
+    failures = docking_gate(seat, metrics, SimpleNamespace(**GATE), key_yaw_limit_deg=2.44)
+    assert failures[:4] == [
         "seat depth error 0.002 m > 0.001 m",
         "seat lateral error 0.003 m > 0.001 m",
         "plug tilt 4 deg > 2 deg",
         "peak axial force 80 N > 50 N",
     ]
+    assert len(failures) == 5 and failures[4].startswith("key yaw 5 deg > 2.44 deg")
+    # a round interface has no key: its yaw is not judged
+    assert docking_gate(replace(seat, key_yaw_deg=None), metrics, SimpleNamespace(**GATE))[4:] == []
