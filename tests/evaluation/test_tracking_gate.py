@@ -243,6 +243,7 @@ def test_a_gate_failure_exits_3_through_the_command_line(tmp_path):
         "+experiment=tracking_gate",
         "task.progress=false",
         "task.tracking_gate.circle_position_rms_m=1e-7",
+        "figures=false",
         f"hydra.run.dir={tmp_path / 'run'}",
     )
     assert bad.returncode == 3, bad.stdout + bad.stderr

@@ -10,7 +10,7 @@ import pytest
 from tests.helpers import run_cli
 
 #: a short docking (1 s stroke, 1 s settling): enough to finish with status ok
-SHORT = ("trajectory.duration=1", "task.settle_time=1", "task.progress=false")
+SHORT = ("trajectory.duration=1", "task.settle_time=1", "task.progress=false", "figures=false")
 
 
 def test_the_default_docking_succeeds_and_writes_the_run_directory(tmp_path):
