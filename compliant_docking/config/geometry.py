@@ -11,8 +11,21 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
-from omegaconf import MISSING
+from compliant_docking.config.ranges import (
+    at_least,
+    each,
+    inside,
+    integers,
+    object_problems,
+    one_of,
+    positive,
+    within,
+)
+
+#: a number strictly between 0 and 1 (solimp's dmin, dmax and midpoint)
+_OPEN_UNIT = inside(0.0, 1.0)
 
 
 @dataclass
@@ -39,11 +52,13 @@ class ContactParams:
               as an offset, which eats clearance; keep 0 unless you know why.
     """
 
-    friction: tuple[float, float, float] = MISSING
-    solref: tuple[float, float] = MISSING
-    solimp: tuple[float, float, float, float, float] = MISSING
-    condim: int = MISSING
-    margin: float = MISSING
+    friction: tuple[float, float, float] = each(positive(), at_least(0.0), at_least(0.0))
+    solref: tuple[float, float] = each(positive(unit="s"), positive())
+    solimp: tuple[float, float, float, float, float] = each(
+        _OPEN_UNIT, _OPEN_UNIT, positive(unit="m"), _OPEN_UNIT, at_least(1.0)
+    )  # dmin, dmax, width, midpoint, power
+    condim: int = one_of(1, 3, 4, 6)
+    margin: float = at_least(0.0, unit="m")
 
     def __post_init__(self) -> None:
         for name in ("friction", "solref", "solimp"):  # accept lists (e.g. from YAML)
@@ -54,7 +69,7 @@ class ContactParams:
                 raise ValueError(
                     f"ContactParams.{name} must be a sequence of numbers; got {value!r}."
                 ) from None
-        _check_contact(self)
+        raise_first(object_problems(self, "ContactParams") or contact_problems(self, "ContactParams"))
 
 
 @dataclass
@@ -71,15 +86,15 @@ class PlugGeometry:
     tip_segments:      polygon sides of the convex tip mesh (vertices on the circle).
     """
 
-    radius: float = MISSING
-    length: float = MISSING
-    chamfer_angle_deg: float = MISSING
-    chamfer_length: float = MISSING
-    mass: float = MISSING
-    tip_segments: int = MISSING
+    radius: float = positive(unit="m")
+    length: float = positive(unit="m")
+    chamfer_angle_deg: float = within(0.0, 80.0, low_open=True, high_open=True, unit="deg")
+    chamfer_length: float = positive(unit="m")
+    mass: float = positive(unit="kg")
+    tip_segments: int = integers(12, 128)
 
     def __post_init__(self) -> None:
-        _check_plug(self)
+        raise_first(object_problems(self, "PlugGeometry") or plug_problems(self, "PlugGeometry"))
 
     @property
     def tip_radius(self) -> float:
@@ -106,17 +121,17 @@ class SocketGeometry:
     floor_thickness:   thickness of the box closing the bottom of the bore [m].
     """
 
-    plug_radius: float = MISSING
-    radial_clearance: float = MISSING
-    insertion_depth: float = MISSING
-    funnel_angle_deg: float = MISSING
-    funnel_depth: float = MISSING
-    sectors: int = MISSING
-    wall_thickness: float = MISSING
-    floor_thickness: float = MISSING
+    plug_radius: float = positive(unit="m")
+    radial_clearance: float = positive(unit="m")
+    insertion_depth: float = positive(unit="m")
+    funnel_angle_deg: float = within(0.0, 80.0, low_open=True, high_open=True, unit="deg")
+    funnel_depth: float = positive(unit="m")
+    sectors: int = integers(8, 64)
+    wall_thickness: float = positive(unit="m")
+    floor_thickness: float = positive(unit="m")
 
     def __post_init__(self) -> None:
-        _check_socket(self)
+        raise_first(object_problems(self, "SocketGeometry") or socket_problems(self, "SocketGeometry"))
 
     @property
     def bore_radius(self) -> float:
@@ -144,151 +159,79 @@ class SocketGeometry:
 
 
 # ------------------------------------------------------------------------ validation
+# The range of each number is declared on its field (compliant_docking/config/ranges.py);
+# the functions below check what involves several fields. They take the dataclass or the
+# composed config node alike (attribute access) and name the fields ``<where>.<field>``:
+# the config key (``target.geometry``) when the config is validated before a run
+# (compliant_docking/config/validate.py), the class name for objects built in Python.
+
+
 def require(ok: bool, setting: str, allowed: str, value: object) -> None:
     """Raise a ValueError naming ``setting``, the allowed range and the given value."""
     if not ok:
         raise ValueError(f"{setting} must be {allowed}; got {value!r}.")
 
 
-def _is_int(value: object) -> bool:
-    return isinstance(value, int) and not isinstance(value, bool)
+def raise_first(problems: list[str]) -> None:
+    """Raise a ValueError with the first of ``problems``, if any."""
+    if problems:
+        raise ValueError(problems[0])
 
 
-def _is_number(value: object) -> bool:
-    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+def contact_problems(c: Any, where: str) -> list[str]:
+    """ContactParams: solimp's dmin <= dmax."""
+    if len(c.solimp) == 5 and not c.solimp[0] <= c.solimp[1]:
+        return [f"{where}.solimp must have dmin <= dmax (its first two values); got {list(c.solimp)}."]
+    return []
 
 
-def _check_numbers(obj: object, names: tuple[str, ...]) -> None:
-    """Every named field of ``obj`` must be a finite real number."""
-    for name in names:
-        value = getattr(obj, name)
-        require(_is_number(value), f"{type(obj).__name__}.{name}", "a finite number", value)
-
-
-def _positive(setting: str, value: float) -> None:
-    require(value > 0.0, setting, "a finite number > 0", value)
-
-
-def _check_contact(c: ContactParams) -> None:
-    require(
-        len(c.friction) == 3 and all(f >= 0.0 for f in c.friction) and c.friction[0] > 0.0,
-        "ContactParams.friction",
-        "three numbers (sliding > 0, torsional >= 0, rolling >= 0)",
-        c.friction,
-    )
-    require(
-        len(c.solref) == 2 and c.solref[0] > 0.0 and c.solref[1] > 0.0,
-        "ContactParams.solref",
-        "two positive numbers (timeconst [s], >= 2 * timestep; dampratio, ~1)",
-        c.solref,
-    )
-    require(
-        len(c.solimp) == 5,
-        "ContactParams.solimp",
-        "five numbers (dmin, dmax, width, midpoint, power)",
-        c.solimp,
-    )
-    dmin, dmax, width, mid, power = c.solimp
-    require(
-        0.0 < dmin <= dmax < 1.0 and width > 0.0 and 0.0 < mid < 1.0 and power >= 1.0,
-        "ContactParams.solimp",
-        "(dmin, dmax, width, midpoint, power) with 0 < dmin <= dmax < 1, width > 0 [m], "
-        "0 < midpoint < 1 and power >= 1",
-        c.solimp,
-    )
-    require(
-        _is_int(c.condim) and c.condim in (1, 3, 4, 6), "ContactParams.condim", "one of 1, 3, 4, 6", c.condim
-    )
-    _check_numbers(c, ("margin",))
-    require(c.margin >= 0.0, "ContactParams.margin", "a finite number >= 0 [m]", c.margin)
-
-
-def _check_plug(p: PlugGeometry) -> None:
-    _check_numbers(p, ("radius", "length", "chamfer_angle_deg", "chamfer_length", "mass"))
-    for name in ("radius", "length", "chamfer_length", "mass"):
-        _positive(f"PlugGeometry.{name}", getattr(p, name))
-    require(
-        0.0 < p.chamfer_angle_deg < 80.0,
-        "PlugGeometry.chamfer_angle_deg",
-        "in the open interval (0, 80) degrees",
-        p.chamfer_angle_deg,
-    )
-    require(
-        p.chamfer_length < p.length,
-        "PlugGeometry.chamfer_length",
-        f"shorter than PlugGeometry.length = {p.length} m",
-        p.chamfer_length,
-    )
+def plug_problems(p: Any, where: str) -> list[str]:
+    """PlugGeometry: the chamfer must fit the plug."""
+    found = []
+    if not p.chamfer_length < p.length:
+        found.append(
+            f"{where}.chamfer_length must be shorter than {where}.length = {p.length} m; "
+            f"got {p.chamfer_length!r}."
+        )
     max_chamfer = 0.9 * p.radius / math.tan(math.radians(p.chamfer_angle_deg))
-    require(
-        p.chamfer_length <= max_chamfer,
-        "PlugGeometry.chamfer_length",
-        f"at most {max_chamfer:.6g} m for radius {p.radius} m and chamfer angle "
-        f"{p.chamfer_angle_deg} deg (the chamfer, chamfer_length * tan(angle), may remove "
-        "at most 90 % of the radius)",
-        p.chamfer_length,
-    )
-    require(
-        _is_int(p.tip_segments) and 12 <= p.tip_segments <= 128,
-        "PlugGeometry.tip_segments",
-        "an integer in [12, 128]",
-        p.tip_segments,
-    )
+    if not p.chamfer_length <= max_chamfer:
+        found.append(
+            f"{where}.chamfer_length must be at most {max_chamfer:.6g} m for radius {p.radius} m "
+            f"and chamfer angle {p.chamfer_angle_deg} deg (the chamfer, chamfer_length * "
+            f"tan(angle), may remove at most 90 % of the radius); got {p.chamfer_length!r}."
+        )
+    return found
 
 
-def _check_socket(s: SocketGeometry) -> None:
-    _check_numbers(
-        s,
-        (
-            "plug_radius",
-            "radial_clearance",
-            "insertion_depth",
-            "funnel_angle_deg",
-            "funnel_depth",
-            "wall_thickness",
-            "floor_thickness",
-        ),
-    )
-    for name in ("plug_radius", "insertion_depth", "funnel_depth", "wall_thickness", "floor_thickness"):
-        _positive(f"SocketGeometry.{name}", getattr(s, name))
-    require(
-        0.0 < s.radial_clearance < s.plug_radius,
-        "SocketGeometry.radial_clearance",
-        f"> 0 and < plug_radius = {s.plug_radius} m (the bore radius, plug_radius + "
-        "radial_clearance, must exceed the plug radius: a plug as large as or larger "
-        "than the bore cannot be inserted)",
-        s.radial_clearance,
-    )
-    require(
-        0.0 < s.funnel_angle_deg < 80.0,
-        "SocketGeometry.funnel_angle_deg",
-        "in the open interval (0, 80) degrees",
-        s.funnel_angle_deg,
-    )
-    require(
-        _is_int(s.sectors) and 8 <= s.sectors <= 64,
-        "SocketGeometry.sectors",
-        "an integer in [8, 64]",
-        s.sectors,
-    )
+def socket_problems(s: Any, where: str) -> list[str]:
+    """SocketGeometry: the bore must be larger than the plug it receives."""
+    if s.radial_clearance < s.plug_radius:
+        return []
+    return [
+        f"{where}.radial_clearance must be > 0 and < {where}.plug_radius = {s.plug_radius} m "
+        "(the bore radius, plug_radius + radial_clearance, must exceed the plug radius: a plug "
+        f"as large as or larger than the bore cannot be inserted); got {s.radial_clearance!r}."
+    ]
+
+
+def fit_problems(plug: Any, socket: Any, plug_where: str, socket_where: str) -> list[str]:
+    """The plug must enter the socket's bore and be longer than the bore is deep
+    (otherwise the flange would have to enter the bore)."""
+    found = []
+    bore = socket.plug_radius + socket.radial_clearance
+    if not plug.radius < bore:
+        found.append(
+            f"{plug_where}.radius must be smaller than the socket bore radius {bore:.6g} m "
+            f"({socket_where}.plug_radius + radial_clearance); got {plug.radius!r}."
+        )
+    if not plug.length > socket.insertion_depth:
+        found.append(
+            f"{plug_where}.length must be longer than {socket_where}.insertion_depth = "
+            f"{socket.insertion_depth} m; got {plug.length!r}."
+        )
+    return found
 
 
 def check_fit(plug: PlugGeometry, socket: SocketGeometry) -> None:
-    """Raise ValueError unless ``plug`` can be inserted into ``socket``.
-
-    The plug radius must be smaller than the bore radius, and the plug must be longer
-    than the bore is deep (otherwise the flange would have to enter the bore).
-    """
-    require(
-        plug.radius < socket.bore_radius,
-        "PlugGeometry.radius",
-        f"smaller than the socket bore radius {socket.bore_radius:.6g} m "
-        "(SocketGeometry.plug_radius + radial_clearance)",
-        plug.radius,
-    )
-    require(
-        plug.length > socket.insertion_depth,
-        "PlugGeometry.length",
-        f"longer than SocketGeometry.insertion_depth = {socket.insertion_depth} m",
-        plug.length,
-    )
+    """Raise ValueError unless ``plug`` can be inserted into ``socket`` (:func:`fit_problems`)."""
+    raise_first(fit_problems(plug, socket, "PlugGeometry", "SocketGeometry"))

@@ -15,13 +15,24 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
-from omegaconf import MISSING
-
-from compliant_docking.config.geometry import _check_numbers, _is_int, _positive, require
+from compliant_docking.config.geometry import raise_first
+from compliant_docking.config.ranges import inside, integers, object_problems, positive
 
 #: allowed numbers of polygon sides (a triangle to a dodecagon)
 SIDES_RANGE = (3, 12)
+
+
+def _sides() -> Any:
+    """The declared range of ``sides`` (:data:`SIDES_RANGE`; a new field each time: a
+    dataclass field object belongs to one class attribute)."""
+    return integers(*SIDES_RANGE)
+
+
+def _angle() -> Any:
+    """The range of the chamfer and funnel angles [deg]."""
+    return inside(0.0, 80.0, unit="deg")
 
 
 @dataclass
@@ -39,15 +50,16 @@ class KeyedPlugGeometry:
     mass:              plug mass [kg]; the inertia is that of a uniform solid of this shape.
     """
 
-    sides: int = MISSING
-    inradius: float = MISSING
-    length: float = MISSING
-    chamfer_angle_deg: float = MISSING
-    chamfer_length: float = MISSING
-    mass: float = MISSING
+    sides: int = _sides()
+    inradius: float = positive(unit="m")
+    length: float = positive(unit="m")
+    chamfer_angle_deg: float = _angle()
+    chamfer_length: float = positive(unit="m")
+    mass: float = positive(unit="kg")
 
     def __post_init__(self) -> None:
-        _check_keyed_plug(self)
+        where = "KeyedPlugGeometry"
+        raise_first(object_problems(self, where) or keyed_plug_problems(self, where))
 
     @property
     def tip_inradius(self) -> float:
@@ -76,17 +88,18 @@ class KeyedSocketGeometry:
     floor_thickness:   thickness of the box closing the bottom of the bore [m].
     """
 
-    sides: int = MISSING
-    plug_inradius: float = MISSING
-    clearance: float = MISSING
-    insertion_depth: float = MISSING
-    funnel_angle_deg: float = MISSING
-    funnel_depth: float = MISSING
-    wall_thickness: float = MISSING
-    floor_thickness: float = MISSING
+    sides: int = _sides()
+    plug_inradius: float = positive(unit="m")
+    clearance: float = positive(unit="m")
+    insertion_depth: float = positive(unit="m")
+    funnel_angle_deg: float = _angle()
+    funnel_depth: float = positive(unit="m")
+    wall_thickness: float = positive(unit="m")
+    floor_thickness: float = positive(unit="m")
 
     def __post_init__(self) -> None:
-        _check_keyed_socket(self)
+        where = "KeyedSocketGeometry"
+        raise_first(object_problems(self, where) or keyed_socket_problems(self, where))
 
     @property
     def bore_inradius(self) -> float:
@@ -124,87 +137,63 @@ class KeyedSocketGeometry:
         return math.degrees(math.pi / n - math.acos(min(ratio, 1.0)))
 
 
-def _check_keyed_plug(p: KeyedPlugGeometry) -> None:
-    _check_numbers(p, ("inradius", "length", "chamfer_angle_deg", "chamfer_length", "mass"))
-    _check_sides("KeyedPlugGeometry.sides", p.sides)
-    for name in ("inradius", "length", "chamfer_length", "mass"):
-        _positive(f"KeyedPlugGeometry.{name}", getattr(p, name))
-    require(
-        0.0 < p.chamfer_angle_deg < 80.0,
-        "KeyedPlugGeometry.chamfer_angle_deg",
-        "in the open interval (0, 80) degrees",
-        p.chamfer_angle_deg,
-    )
-    require(
-        p.chamfer_length < p.length,
-        "KeyedPlugGeometry.chamfer_length",
-        f"shorter than KeyedPlugGeometry.length = {p.length} m",
-        p.chamfer_length,
-    )
+# The range of each number is declared on its field (compliant_docking/config/ranges.py);
+# the functions below check what involves several fields, on the dataclass or the composed
+# config node alike, naming the fields ``<where>.<field>`` (config keys when the config is
+# validated before a run: compliant_docking/config/validate.py).
+
+
+def keyed_plug_problems(p: Any, where: str) -> list[str]:
+    """The chamfer must fit the plug."""
+    found = []
+    if not p.chamfer_length < p.length:
+        found.append(
+            f"{where}.chamfer_length must be shorter than {where}.length = {p.length} m; "
+            f"got {p.chamfer_length!r}."
+        )
     max_chamfer = 0.9 * p.inradius / math.tan(math.radians(p.chamfer_angle_deg))
-    require(
-        p.chamfer_length <= max_chamfer,
-        "KeyedPlugGeometry.chamfer_length",
-        f"at most {max_chamfer:.6g} m for inradius {p.inradius} m and chamfer angle "
-        f"{p.chamfer_angle_deg} deg (the chamfer may remove at most 90 % of the inradius)",
-        p.chamfer_length,
-    )
+    if not p.chamfer_length <= max_chamfer:
+        found.append(
+            f"{where}.chamfer_length must be at most {max_chamfer:.6g} m for inradius {p.inradius} m "
+            f"and chamfer angle {p.chamfer_angle_deg} deg (the chamfer may remove at most 90 % of "
+            f"the inradius); got {p.chamfer_length!r}."
+        )
+    return found
 
 
-def _check_keyed_socket(s: KeyedSocketGeometry) -> None:
-    _check_numbers(
-        s,
-        (
-            "plug_inradius",
-            "clearance",
-            "insertion_depth",
-            "funnel_angle_deg",
-            "funnel_depth",
-            "wall_thickness",
-            "floor_thickness",
-        ),
-    )
-    _check_sides("KeyedSocketGeometry.sides", s.sides)
-    for name in ("plug_inradius", "insertion_depth", "funnel_depth", "wall_thickness", "floor_thickness"):
-        _positive(f"KeyedSocketGeometry.{name}", getattr(s, name))
-    require(
-        0.0 < s.clearance < s.plug_inradius,
-        "KeyedSocketGeometry.clearance",
-        f"> 0 and < plug_inradius = {s.plug_inradius} m (the gap between parallel plug and bore faces)",
-        s.clearance,
-    )
-    require(
-        0.0 < s.funnel_angle_deg < 80.0,
-        "KeyedSocketGeometry.funnel_angle_deg",
-        "in the open interval (0, 80) degrees",
-        s.funnel_angle_deg,
-    )
+def keyed_socket_problems(s: Any, where: str) -> list[str]:
+    """The gap must be smaller than the plug it receives."""
+    if s.clearance < s.plug_inradius:
+        return []
+    return [
+        f"{where}.clearance must be > 0 and < {where}.plug_inradius = {s.plug_inradius} m (the gap "
+        f"between parallel plug and bore faces); got {s.clearance!r}."
+    ]
 
 
-def _check_sides(setting: str, sides: object) -> None:
-    low, high = SIDES_RANGE
-    require(_is_int(sides) and low <= sides <= high, setting, f"an integer in [{low}, {high}]", sides)  # type: ignore[operator]
+def keyed_fit_problems(plug: Any, socket: Any, plug_where: str, socket_where: str) -> list[str]:
+    """The plug must have the socket's sides, a smaller inradius than the bore's, and be
+    longer than the bore is deep."""
+    found = []
+    if plug.sides != socket.sides:
+        found.append(
+            f"{socket_where}.sides must equal {plug_where}.sides = {plug.sides} (the key); "
+            f"got {socket.sides!r}."
+        )
+    bore = socket.plug_inradius + socket.clearance
+    if not plug.inradius < bore:
+        found.append(
+            f"{plug_where}.inradius must be smaller than the socket's bore inradius {bore:.6g} m "
+            f"({socket_where}.plug_inradius + clearance); got {plug.inradius!r}."
+        )
+    if not plug.length > socket.insertion_depth:
+        found.append(
+            f"{plug_where}.length must be longer than {socket_where}.insertion_depth = "
+            f"{socket.insertion_depth} m; got {plug.length!r}."
+        )
+    return found
 
 
 def check_keyed_fit(plug: KeyedPlugGeometry, socket: KeyedSocketGeometry) -> None:
-    """Raise ValueError unless ``plug`` can be inserted into ``socket``: same number of
-    sides, a smaller inradius than the bore's, longer than the bore is deep."""
-    require(
-        plug.sides == socket.sides,
-        "KeyedSocketGeometry.sides",
-        f"equal to KeyedPlugGeometry.sides = {plug.sides} (the key)",
-        socket.sides,
-    )
-    require(
-        plug.inradius < socket.bore_inradius,
-        "KeyedPlugGeometry.inradius",
-        f"smaller than the socket's bore inradius {socket.bore_inradius:.6g} m "
-        "(KeyedSocketGeometry.plug_inradius + clearance)",
-        plug.inradius,
-    )
-    require(
-        plug.length > socket.insertion_depth,
-        "KeyedPlugGeometry.length",
-        f"longer than KeyedSocketGeometry.insertion_depth = {socket.insertion_depth} m",
-        plug.length,
-    )
+    """Raise ValueError unless ``plug`` can be inserted into ``socket`` (:func:`keyed_fit_problems`)."""
+    raise_first(keyed_fit_problems(plug, socket, "KeyedPlugGeometry", "KeyedSocketGeometry"))

@@ -8,6 +8,10 @@ every sweep; the geometry dataclasses it reuses bring in mujoco's module (~0.16 
 model or other heavy object is built.
 
 Units are SI (m, rad, N, N·m, s) unless a field name says otherwise (``_deg``).
+Every numeric field declares its allowed values (``positive()``, ``within(0, 0.01, …)``:
+:mod:`compliant_docking.config.ranges`); a composed config is checked against them before
+anything runs (:mod:`compliant_docking.config.validate`). A range is not a default: the
+values are in the YAML under ``conf/``.
 """
 
 from __future__ import annotations
@@ -31,6 +35,15 @@ from compliant_docking.config.geometry import (
     SocketGeometry,
 )
 from compliant_docking.config.keyed import KeyedPlugGeometry, KeyedSocketGeometry
+from compliant_docking.config.ranges import (
+    above,
+    at_least,
+    finite,
+    inside,
+    integers,
+    positive,
+    within,
+)
 
 
 # --------------------------------------------------------------------------- robot
@@ -41,10 +54,10 @@ class RobotConfig:
     name: str = MISSING
     mjcf: str = MISSING  # arm-only MJCF, relative to the repository root
     ee_site: str = MISSING  # flange site where the tool is mounted
-    velocity_limits: List[float] = MISSING  # datasheet joint speed limits [rad/s]
-    torque_limits: List[float] = MISSING  # hardware joint torque limits [N·m] (MJCF ctrlrange)
-    max_torque: List[float] = MISSING  # software clip of the command per joint [N·m]
-    ik_guess: List[float] = MISSING  # joint-space seed of the start-pose inverse kinematics
+    velocity_limits: List[float] = positive(at_most=100.0, unit="rad/s")  # datasheet joint speed limits
+    torque_limits: List[float] = positive(unit="N·m")  # hardware joint torque limits [N·m] (MJCF ctrlrange)
+    max_torque: List[float] = positive(unit="N·m")  # software clip of the command per joint [N·m]
+    ik_guess: List[float] = finite(unit="rad")  # joint-space seed of the start-pose inverse kinematics
 
 
 # --------------------------------------------------------------------------- tool / target
@@ -59,8 +72,8 @@ class ToolConfig:
     name: str = MISSING
     mjcf: Optional[str] = MISSING
     prefix: str = MISSING
-    mount_pos: List[float] = MISSING  # in the ee_site frame
-    mount_quat: List[float] = MISSING  # wxyz
+    mount_pos: List[float] = within(-1.0, 1.0, unit="m", size=3)  # in the ee_site frame
+    mount_quat: List[float] = within(-1.0, 1.0, size=4)  # wxyz
     geometry: PlugGeometry = MISSING
 
 
@@ -75,8 +88,8 @@ class TargetConfig:
     name: str = MISSING
     mjcf: Optional[str] = MISSING
     prefix: str = MISSING
-    pos: List[float] = MISSING  # world position of the seat [m]
-    quat: List[float] = MISSING  # wxyz
+    pos: List[float] = within(-10.0, 10.0, unit="m", size=3)  # world position of the seat [m]
+    quat: List[float] = within(-1.0, 1.0, size=4)  # wxyz
     geometry: SocketGeometry = MISSING
     contact: ContactParams = MISSING
 
@@ -108,14 +121,14 @@ class PhysicsConfig:
     """MuJoCo options, set on the final assembled spec. Pinocchio uses the same gravity."""
 
     name: str = MISSING
-    timestep: float = MISSING
-    gravity: List[float] = MISSING
+    timestep: float = positive(at_most=0.01, unit="s")
+    gravity: List[float] = within(-100.0, 100.0, unit="m/s²", size=3)
     integrator: Integrator = MISSING
     cone: Cone = MISSING
-    iterations: int = MISSING
-    tolerance: float = MISSING
-    sdf_iterations: int = MISSING
-    sdf_initpoints: int = MISSING
+    iterations: int = integers(1, 10_000)
+    tolerance: float = within(0.0, 1.0, high_open=True)
+    sdf_iterations: int = integers(1, 1000)
+    sdf_initpoints: int = integers(1, 1000)
     # MuJoCo's bounding-volume midphase pays off for large meshes; for the handful of
     # convex pieces of a docking interface it only costs time (results are identical).
     midphase: bool = MISSING
@@ -136,14 +149,14 @@ class ControllerConfig:
 class ImpedanceConfig(ControllerConfig):
     """Task-space impedance (CONTROL_LAWS.md §1; seed ``ImpedanceConfig``)."""
 
-    m: float = MISSING
-    d: float = MISSING
-    k: float = MISSING
-    m_rot: float = MISSING
-    d_rot: float = MISSING
-    k_rot: float = MISSING
-    null_damping: float = MISSING
-    condition_threshold: float = MISSING  # cond(J M⁻¹ Jᵀ) above which Λ uses a damped pseudo-inverse
+    m: float = positive(unit="kg")
+    d: float = at_least(0.0, unit="N·s/m")
+    k: float = at_least(0.0, unit="N/m")
+    m_rot: float = positive(unit="kg·m²")
+    d_rot: float = at_least(0.0, unit="N·m·s/rad")
+    k_rot: float = at_least(0.0, unit="N·m/rad")
+    null_damping: float = at_least(0.0)
+    condition_threshold: float = above(1.0)  # cond(J M⁻¹ Jᵀ) above which Λ uses a damped pseudo-inverse
 
 
 @dataclass
@@ -161,23 +174,23 @@ class HQPConfig(ControllerConfig):
     k_ji the posture weight.
     """
 
-    K0: List[float] = MISSING  # maximum task stiffness [N/m ×3, N·m/rad ×3]
-    K_min_ratio: float = MISSING  # minimum stiffness, as a share of K0
-    k_alpha: float = MISSING  # sigmoid gain of the adaptive stiffness [1/N]
-    omega_th: float = MISSING  # manipulability threshold of singularity avoidance
-    k_sa: float = MISSING  # weight of singularity avoidance [rad/s²]
-    K_ji: List[float] = MISSING  # diagonal of the seed's 5·I [1/s²]
-    D_ji: List[float] = MISSING  # diagonal of the seed's 10·I [1/s]
-    k_ji: float = MISSING
-    dt_p: float = MISSING  # zero-order-hold prediction horizon of the constraints [s]
-    eps_abs: float = MISSING  # ProxQP absolute accuracy
+    K0: List[float] = positive(size=6)  # maximum task stiffness [N/m ×3, N·m/rad ×3]
+    K_min_ratio: float = positive(at_most=1.0)  # minimum stiffness, as a share of K0
+    k_alpha: float = at_least(0.0, unit="1/N")  # sigmoid gain of the adaptive stiffness [1/N]
+    omega_th: float = at_least(0.0)  # manipulability threshold of singularity avoidance
+    k_sa: float = at_least(0.0, unit="rad/s²")  # weight of singularity avoidance [rad/s²]
+    K_ji: List[float] = at_least(0.0, unit="1/s²")  # diagonal of the seed's 5·I [1/s²]
+    D_ji: List[float] = at_least(0.0, unit="1/s")  # diagonal of the seed's 10·I [1/s]
+    k_ji: float = at_least(0.0)
+    dt_p: float = positive(at_most=1.0, unit="s")  # zero-order-hold prediction horizon of the constraints
+    eps_abs: float = positive()  # ProxQP absolute accuracy
     force_source: ForceSource = MISSING
-    observer_kp: float = MISSING  # [1/s]
-    observer_ki: float = MISSING  # [1/s²]
-    preload_force: float = MISSING  # [N] along the docking axis; 0: off
-    preload_ramp_s: float = MISSING  # [s]
-    contact_deadband: float = MISSING  # [N] subtracted from the wrench norm
-    condition_threshold: float = MISSING  # cond(J M⁻¹ Jᵀ) above which Λ's eigenvalues are floored
+    observer_kp: float = positive(unit="1/s")  # [1/s]
+    observer_ki: float = at_least(0.0, unit="1/s²")  # [1/s²]
+    preload_force: float = at_least(0.0, unit="N")  # [N] along the docking axis; 0: off
+    preload_ramp_s: float = positive(unit="s")  # [s]
+    contact_deadband: float = at_least(0.0, unit="N")  # [N] subtracted from the wrench norm
+    condition_threshold: float = above(1.0)  # cond(J M⁻¹ Jᵀ) above which Λ's eigenvalues are floored
     null_space_metric: NullSpaceMetric = MISSING
     solve_every_step: bool = MISSING  # call ProxQP even when the closed-form optimum meets every row
 
@@ -187,12 +200,12 @@ class SE3LieConfig(ControllerConfig):
     """SE(3) impedance in exponential coordinates (CONTROL_LAWS.md §3; seed
     ``SE3ImpedanceConfig``). Diagonals of the 6×6 A, D, K, translation first."""
 
-    A_diag: List[float] = MISSING  # [kg | kg·m²]
-    D_diag: List[float] = MISSING  # [N·s/m | N·m·s/rad]
-    K_diag: List[float] = MISSING  # [N/m | N·m/rad]
-    null_damping: float = MISSING  # null-space joint acceleration damping q̈ = −b·v [1/s]
-    condition_threshold: float = MISSING  # cond(J_b M⁻¹ J_bᵀ) above which Λ uses a damped pseudo-inverse
-    desired_wrench: List[float] = MISSING  # F_d in the desired TCP frame [N, N·m]
+    A_diag: List[float] = positive(size=6)  # [kg | kg·m²]
+    D_diag: List[float] = at_least(0.0, size=6)  # [N·s/m | N·m·s/rad]
+    K_diag: List[float] = at_least(0.0, size=6)  # [N/m | N·m/rad]
+    null_damping: float = at_least(0.0, unit="1/s")  # null-space joint acceleration damping q̈ = −b·v [1/s]
+    condition_threshold: float = above(1.0)  # cond(J_b M⁻¹ J_bᵀ) above which Λ uses a damped pseudo-inverse
+    desired_wrench: List[float] = finite(size=6)  # F_d in the desired TCP frame [N, N·m]
     formulation: SE3Formulation = MISSING  # twist | lambda_space (same law)
 
 
@@ -209,14 +222,14 @@ class TrajectoryConfig:
 class QuinticConfig(TrajectoryConfig):
     """Rest-to-rest quintic along the stroke, orientation held (CONTROL_LAWS.md §4)."""
 
-    duration: float = MISSING  # the seed's DockingConfig.traj_duration [s]
+    duration: float = positive(unit="s")  # the seed's DockingConfig.traj_duration [s]
 
 
 @dataclass
 class HoldConfig(TrajectoryConfig):
     """Hold the start pose (push tests, compliance identification)."""
 
-    duration: float = MISSING
+    duration: float = positive(unit="s")
 
 
 @dataclass
@@ -227,11 +240,11 @@ class TwoPhaseConfig(TrajectoryConfig):
     T = max(1.875·L/v_max, √(5.7735·L/a_max)) (CONTROL_LAWS.md §4; seed ``TrajectorySpec``).
     """
 
-    standoff: float = MISSING  # pre-dock point this far before the goal along the docking axis [m]
-    v_max_approach: float = MISSING  # [m/s]
-    a_max_approach: float = MISSING  # [m/s²]
-    v_max_docking: float = MISSING  # [m/s]
-    a_max_docking: float = MISSING  # [m/s²]
+    standoff: float = at_least(0.0, unit="m")  # pre-dock point this far before the goal, along the axis
+    v_max_approach: float = positive(unit="m/s")  # [m/s]
+    a_max_approach: float = positive(unit="m/s²")  # [m/s²]
+    v_max_docking: float = positive(unit="m/s")  # [m/s]
+    a_max_docking: float = positive(unit="m/s²")  # [m/s²]
 
 
 @dataclass
@@ -240,10 +253,10 @@ class SE3ToppConfig(TwoPhaseConfig):
     a time-optimal bang-bang profile, also under angular speed/acceleration limits
     (paper Table 8)."""
 
-    omega_max_approach: float = MISSING  # angular speed [rad/s]
-    alpha_max_approach: float = MISSING  # angular acceleration [rad/s²]
-    omega_max_docking: float = MISSING  # [rad/s]
-    alpha_max_docking: float = MISSING  # [rad/s²]
+    omega_max_approach: float = positive(unit="rad/s")  # angular speed [rad/s]
+    alpha_max_approach: float = positive(unit="rad/s²")  # angular acceleration [rad/s²]
+    omega_max_docking: float = positive(unit="rad/s")  # [rad/s]
+    alpha_max_docking: float = positive(unit="rad/s²")  # [rad/s²]
 
 
 @dataclass
@@ -253,15 +266,15 @@ class TrackingConfig(TrajectoryConfig):
     Needs ``target=none``. Each phase is driven by the quintic time scaling (rest to rest).
     """
 
-    transition_duration: float = MISSING  # each of the two transitions [s]
-    circle_duration: float = MISSING  # [s]
-    circle_radius: float = MISSING  # [m]
-    circle_frequency: float = MISSING  # mean revolutions per second [Hz]
-    circle_center_offset: float = MISSING  # circle centre relative to the start, world z [m]
-    figure8_duration: float = MISSING  # [s]
-    figure8_radius_x: float = MISSING  # x amplitude [m]
-    figure8_radius_y: float = MISSING  # y amplitude [m]
-    figure8_frequency: float = MISSING  # mean cycles per second [Hz]
+    transition_duration: float = positive(unit="s")  # each of the two transitions [s]
+    circle_duration: float = positive(unit="s")  # [s]
+    circle_radius: float = within(0.0, 1.0, unit="m")  # [m]
+    circle_frequency: float = at_least(0.0, unit="Hz")  # mean revolutions per second [Hz]
+    circle_center_offset: float = within(-1.0, 1.0, unit="m")  # circle centre relative to the start, world z
+    figure8_duration: float = positive(unit="s")  # [s]
+    figure8_radius_x: float = within(0.0, 1.0, unit="m")  # x amplitude [m]
+    figure8_radius_y: float = within(0.0, 1.0, unit="m")  # y amplitude [m]
+    figure8_frequency: float = at_least(0.0, unit="Hz")  # mean cycles per second [Hz]
 
 
 # --------------------------------------------------------------------------- task
@@ -269,13 +282,13 @@ class TrackingConfig(TrajectoryConfig):
 class DockingGateConfig:
     """When a docking run counts as a success (evaluated on the true socket pose)."""
 
-    depth_tolerance_m: float = MISSING  # tip within this of the seat, along the socket axis
-    lateral_tolerance_m: float = MISSING  # tip within this of the socket axis
-    tilt_tolerance_deg: float = MISSING  # plug axis within this of the socket axis
-    peak_force_budget_N: float = MISSING  # peak axial contact force allowed over the run
+    depth_tolerance_m: float = positive(unit="m")  # tip within this of the seat, along the socket axis
+    lateral_tolerance_m: float = positive(unit="m")  # tip within this of the socket axis
+    tilt_tolerance_deg: float = positive(at_most=180.0, unit="deg")  # plug axis this close to the socket axis
+    peak_force_budget_N: float = positive(unit="N")  # peak axial contact force allowed over the run
     # keyed interfaces: the plug's roll within this of the socket's key; null: the key's
     # yaw play + 0.1 deg (a seated plug cannot turn further), unchecked if it declares none
-    key_yaw_tolerance_deg: Optional[float] = MISSING
+    key_yaw_tolerance_deg: Optional[float] = positive(at_most=180.0, unit="deg")
 
 
 @dataclass
@@ -286,12 +299,12 @@ class TrackingThresholds:
     whole run; see compliant_docking/tracking_gate.py.
     """
 
-    circle_position_rms_m: float = MISSING  # position RMS over the circle segment [m]
-    figure8_position_rms_m: float = MISSING  # position RMS over the figure-8 segment [m]
-    position_peak_m: float = MISSING  # peak position error over the motion [m]
-    orientation_rms_rad: float = MISSING  # orientation RMS over the motion (0.5°) [rad]
-    torque_saturation_ratio: float = MISSING  # share of steps with a clipped torque command
-    max_contacts: int = MISSING  # largest number of MuJoCo contacts allowed at any step
+    circle_position_rms_m: float = positive(unit="m")  # position RMS over the circle segment [m]
+    figure8_position_rms_m: float = positive(unit="m")  # position RMS over the figure-8 segment [m]
+    position_peak_m: float = positive(unit="m")  # peak position error over the motion [m]
+    orientation_rms_rad: float = positive(unit="rad")  # orientation RMS over the motion (0.5°) [rad]
+    torque_saturation_ratio: float = within(0.0, 1.0)  # share of steps with a clipped torque command
+    max_contacts: int = integers(0)  # largest number of MuJoCo contacts allowed at any step
 
 
 @dataclass
@@ -306,15 +319,15 @@ class MisalignmentConfig:
     compliant_docking/misalignment.py and docs/sweeps.md.
     """
 
-    x: float = MISSING  # lateral offset along the socket x axis [m]
-    y: float = MISSING  # lateral offset along the socket y axis [m]
-    yaw_deg: float = MISSING  # rotation about the socket axis [deg]
-    tilt_deg: float = MISSING  # rotation about the (yawed) socket x axis [deg]
-    x_range: Optional[List[float]] = MISSING  # [low, high]: draw x uniformly [m]
-    y_range: Optional[List[float]] = MISSING  # [low, high]: draw y uniformly [m]
-    yaw_deg_range: Optional[List[float]] = MISSING  # [low, high]: draw yaw uniformly [deg]
-    tilt_deg_range: Optional[List[float]] = MISSING  # [low, high]: draw tilt uniformly [deg]
-    seed: int = MISSING  # seed of the draws (same seed, same draw)
+    x: float = within(-1.0, 1.0, unit="m")  # lateral offset along the socket x axis [m]
+    y: float = within(-1.0, 1.0, unit="m")  # lateral offset along the socket y axis [m]
+    yaw_deg: float = within(-360.0, 360.0, unit="deg")  # rotation about the socket axis [deg]
+    tilt_deg: float = inside(-60, 60, unit="deg")  # rotation about the (yawed) socket x axis [deg]
+    x_range: Optional[List[float]] = within(-1.0, 1.0, unit="m", size=2)  # [low, high]: draw x uniformly [m]
+    y_range: Optional[List[float]] = within(-1.0, 1.0, unit="m", size=2)  # [low, high]: draw y uniformly [m]
+    yaw_deg_range: Optional[List[float]] = within(-360, 360, unit="deg", size=2)  # draw yaw in [low, high]
+    tilt_deg_range: Optional[List[float]] = inside(-60, 60, unit="deg", size=2)  # draw tilt in [low, high]
+    seed: int = integers(0, 2**63 - 1)  # seed of the draws (same seed, same draw)
 
 
 @dataclass
@@ -328,14 +341,14 @@ class TaskConfig:
     """
 
     name: str = MISSING
-    init_pos: Optional[List[float]] = MISSING  # TCP start position in the world [m]
-    init_quat: Optional[List[float]] = MISSING  # TCP start orientation, wxyz
-    stroke: List[float] = MISSING  # start → seat [m]
-    insertion_overshoot: float = MISSING  # after the motion, press the reference this far past the seat [m]
-    press_duration: float = MISSING  # how long that press takes (within settle_time) [s]
-    duration: Optional[float] = MISSING  # run length [s]; null: planner duration + settle_time
-    settle_time: float = MISSING  # run time after the trajectory ends [s]
-    steady_window: float = MISSING  # window at the end for the steady-state metrics [s]
+    init_pos: Optional[List[float]] = within(-10, 10, unit="m", size=3)  # TCP start position in the world
+    init_quat: Optional[List[float]] = within(-1.0, 1.0, size=4)  # TCP start orientation, wxyz
+    stroke: List[float] = within(-10.0, 10.0, unit="m", size=3)  # start → seat [m]
+    insertion_overshoot: float = within(0.0, 0.1, unit="m")  # then press the reference this far past the seat
+    press_duration: float = positive(unit="s")  # how long that press takes (within settle_time) [s]
+    duration: Optional[float] = positive(unit="s")  # run length [s]; null: planner duration + settle_time
+    settle_time: float = at_least(0.0, unit="s")  # run time after the trajectory ends [s]
+    steady_window: float = positive(unit="s")  # window at the end for the steady-state metrics [s]
     gate: DockingGateConfig = MISSING
     tracking_gate: TrackingThresholds = MISSING  # trajectory=tracking
     misalignment: MisalignmentConfig = MISSING  # true vs believed socket pose
@@ -360,17 +373,17 @@ class RenderConfig:
     """
 
     name: str = MISSING
-    fps: int = MISSING  # frames per second of video [1/s]
-    speed: float = MISSING  # simulated seconds per second of video (0.25: 4× slow motion)
-    width: int = MISSING  # frame width [px], rounded down to even (H.264 4:2:0)
-    height: int = MISSING  # frame height [px], force strip included, rounded down to even
+    fps: int = integers(1, 1000)  # frames per second of video [1/s]
+    speed: float = positive()  # simulated seconds per second of video (0.25: 4× slow motion)
+    width: int = integers(16, 8192)  # frame width [px], rounded down to even (H.264 4:2:0)
+    height: int = integers(16, 8192)  # frame height [px], force strip included, rounded down to even
     camera: str = MISSING  # model camera of the main view (the scene's, aimed at the tool)
     closeup: bool = MISSING  # a second view beside it, close to the socket mouth (or the tool)
-    closeup_distance: float = MISSING  # close-up camera distance from what it looks at [m]
+    closeup_distance: float = positive(unit="m")  # close-up camera distance from what it looks at [m]
     overlay: bool = MISSING  # time and contact force: text and a force-over-time strip
     shadows: bool = MISSING  # shadows: about 3× slower with software OpenGL
     antialias: bool = MISSING  # 4× multisampling: about 3× slower with software OpenGL
-    crf: int = MISSING  # H.264 constant rate factor: 0 lossless … 51 worst
+    crf: int = integers(0, 51)  # H.264 constant rate factor: 0 lossless … 51 worst
 
 
 # --------------------------------------------------------------------------- top level

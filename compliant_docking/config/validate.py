@@ -1,0 +1,406 @@
+"""Checking a composed config before anything runs: every key known, every number allowed.
+
+:func:`validate` raises :class:`ConfigError` listing every problem of a composed config,
+each one sentence naming the config key (``target.geometry.radial_clearance``, never a
+class name), what is allowed and the value given:
+
+- **unknown keys**: a key that no schema declares, added with ``+`` or ``++``
+  (``+physcs.timestep=0.002``, ``++physics.timstep=0.002``, ``+controller.kk=1``), with
+  the nearest valid keys (``difflib``). Plain overrides of unknown keys are already
+  refused by Hydra at composition. Nodes of config groups without a schema (a folder
+  under ``conf/``) and Hydra's own node are not checked here;
+- **numbers**: every numeric leaf (list items included) must be finite and inside the
+  range its schema field declares (:mod:`compliant_docking.config.ranges`);
+- **relations** between settings: one value per joint in every per-joint list, unit
+  quaternions, a non-zero stroke, the press within the settle time, the misalignment's
+  fixed value or range, a plug that fits its socket (geometry checks of
+  :mod:`compliant_docking.config.geometry`, named by their config keys), a start
+  position without a target;
+- **memory**: a run whose logs would not fit in the available memory
+  (:func:`memory_problem`; the simulation repeats the check with its exact step count
+  before it allocates anything).
+
+The command line runs :func:`validate` before Hydra writes a run or sweep directory
+(compliant_docking/sweep/guard.py), and :func:`compliant_docking.run.runner.execute`
+runs it first for runs started from Python.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import difflib
+import math
+import os
+from collections.abc import Callable
+from typing import Any
+
+from omegaconf import DictConfig, ListConfig, OmegaConf
+
+from compliant_docking import CONF_DIR
+from compliant_docking.config import geometry, keyed
+from compliant_docking.config.ranges import field_range, problems, show
+from compliant_docking.config.schemas import Config
+
+#: memory a run needs per simulated step [bytes]: measured 1.2 kB (peak RSS of the default
+#: docking with impedance and with hqp, figures included, 20 000 → 80 000 steps:
+#: 320 → 393 MB), with room for controllers that log more per-step columns
+BYTES_PER_STEP = 2000
+#: lists with one value per joint (their length must agree)
+PER_JOINT = ("robot.velocity_limits", "robot.torque_limits", "robot.max_torque", "robot.ik_guess")
+#: quaternion settings, wxyz
+QUATERNIONS = ("tool.mount_quat", "target.quat", "task.init_quat")
+#: how far from 1 a quaternion's norm may be
+UNIT_TOLERANCE = 1e-6
+
+
+class ConfigError(ValueError):
+    """A composed config that must not run; ``problems``: one sentence each."""
+
+    def __init__(self, problems: list[str]) -> None:
+        self.problems = list(problems)
+        super().__init__(" ".join(self.problems))
+
+    def report(self) -> str:
+        """The problems as the command line prints them: a header, one paragraph each."""
+        lines = ["compliant-docking: the configuration is refused; nothing was run or written."]
+        lines += [f"  {p}" for p in self.problems]
+        return "\n".join(lines)
+
+
+def validate(cfg: DictConfig) -> None:
+    """Raise :class:`ConfigError` when ``cfg`` (a composed config) must not run."""
+    found = check(cfg)
+    if found:
+        raise ConfigError(found)
+
+
+def check(cfg: DictConfig) -> list[str]:
+    """Every problem of the composed config ``cfg`` (see the module docstring), [] if none."""
+    found: list[str] = []
+    groups = _group_names()
+    top = {f.name for f in dataclasses.fields(Config)}
+    for key in cfg:
+        key = str(key)
+        if key == "hydra" or (key not in top and key in groups):
+            continue
+        if key not in top:
+            found += _unknown(cfg, key, sorted(top), where="")
+            continue
+        found += _walk(cfg, key, _choice(cfg, key))
+    if found:
+        return found
+    found += _relations(cfg)
+    if not found:
+        problem = memory_problem(cfg)
+        if problem:
+            found.append(problem)
+    return found
+
+
+# --------------------------------------------------------------------------- keys and ranges
+def _walk(parent: DictConfig, key: str, choice: str | None, prefix: str = "") -> list[str]:
+    """The problems of the node ``parent[key]`` (full key ``prefix + key``)."""
+    full = f"{prefix}{key}"
+    try:
+        node = parent._get_node(key)
+        value = parent[key]
+    except Exception as exc:  # an interpolation that does not resolve
+        return [f"{full} cannot be resolved: {_first_line(exc)}."]
+    schema = OmegaConf.get_type(node) if isinstance(node, DictConfig) else None
+    if not (isinstance(value, DictConfig) and dataclasses.is_dataclass(schema)):
+        return []
+    fields = {f.name: f for f in dataclasses.fields(schema)}
+    where = f" of {choice}" if choice else ""
+    found: list[str] = []
+    for sub in value:
+        sub = str(sub)
+        if sub not in fields:
+            found += _unknown(value, sub, sorted(fields), where=where, prefix=f"{full}.")
+            continue
+        child = value._get_node(sub)
+        if isinstance(child, DictConfig):
+            found += _walk(value, sub, choice, prefix=f"{full}.")
+            continue
+        try:
+            leaf = value[sub]
+        except Exception as exc:
+            found.append(f"{full}.{sub} cannot be resolved: {_first_line(exc)}.")
+            continue
+        if isinstance(leaf, ListConfig):
+            leaf = OmegaConf.to_container(leaf, resolve=True)
+        rng = field_range(fields[sub])
+        if rng is not None:
+            found += problems(f"{full}.{sub}", leaf, rng)
+        elif isinstance(leaf, float) and not math.isfinite(leaf):
+            found.append(f"{full}.{sub} must be a finite number; got {show(leaf)}.")
+    return found
+
+
+def _unknown(node: DictConfig, key: str, valid: list[str], *, where: str, prefix: str = "") -> list[str]:
+    """``<prefix><key>`` is not a setting: name every leaf given under it and the nearest keys."""
+    leaves = [f"{prefix}{leaf}" for leaf in _leaf_keys(node, key)]
+    return [unknown_key(f"{prefix}{key}", valid, where=where, given=leaves, added=True)]
+
+
+def unknown_key(
+    key: str, valid: list[str], *, where: str = "", given: list[str] | None = None, added: bool = False
+) -> str:
+    """``controller.kk is not a setting of controller=impedance; did you mean controller.k?``
+
+    ``valid``: the names allowed beside the last part of ``key``; ``given``: the leaf keys
+    given under it (``physcs.timestep`` for the unknown ``physcs``); ``added``: it came
+    with ``+``/``++`` (Hydra refuses plain overrides of unknown keys itself).
+    """
+    parent, _, name = key.rpartition(".")
+    prefix = f"{parent}." if parent else ""
+    leaves = given or [key]
+    close = difflib.get_close_matches(name, valid, n=3, cutoff=0.6)
+    if close:
+        tail = leaves[0][len(key) :]
+        hint = f"did you mean {' or '.join(f'{prefix}{c}{tail}' for c in close)}?"
+    else:
+        hint = f"the settings here are: {', '.join(f'{prefix}{v}' for v in valid)}."
+    kind = "is not a setting" if len(leaves) == 1 else "are not settings"
+    how = " (added with + or ++?)" if added else ""
+    return f"{', '.join(leaves)} {kind}{where}{how}; {hint}"
+
+
+def composition_problem(exc: BaseException) -> str:
+    """A Hydra composition error as one paragraph naming the config key, never a class:
+    an unknown key with the nearest valid ones, a value of the wrong type, a missing
+    option with the available ones (Hydra's config search path left out)."""
+    cause = exc.__cause__ if exc.__cause__ is not None else exc
+    key = getattr(cause, "full_key", None)
+    schema = getattr(cause, "object_type", None)
+    if (
+        key
+        and type(cause).__name__ in ("ConfigAttributeError", "ConfigKeyError")
+        and dataclasses.is_dataclass(schema)
+    ):
+        return unknown_key(key, [f.name for f in dataclasses.fields(schema)])
+    if key:
+        return f"{key}: {_first_line(cause).rstrip('.')}."
+    return one_paragraph(exc)
+
+
+def one_paragraph(exc: BaseException) -> str:
+    """An error's text as one paragraph: ``Could not find 'robot/ur5'; available options in
+    'robot': fr3, iiwa14`` (without Hydra's config search path)."""
+    text = str(exc).split("Config search path:")[0]
+    parts: list[str] = []
+    for line in (line.strip() for line in text.splitlines()):
+        if not line:
+            continue
+        if parts and parts[-1].endswith(":"):
+            parts[-1] += f" {line}"
+        elif parts and ":" in parts[-1] and line.isidentifier():  # the next listed option
+            parts[-1] += f", {line}"
+        else:
+            parts.append(line)
+    return "; ".join(parts) or type(exc).__name__
+
+
+def _leaf_keys(node: DictConfig, key: str) -> list[str]:
+    """The dotted keys of the leaves under ``node[key]`` (``physcs.timestep``)."""
+    child = node._get_node(key)
+    if not isinstance(child, DictConfig):
+        return [key]
+    return [f"{key}.{leaf}" for sub in child for leaf in _leaf_keys(child, str(sub))]
+
+
+def _choice(cfg: DictConfig, group: str) -> str | None:
+    """``controller=impedance``: the option of ``group`` (for messages)."""
+    node = cfg.get(group) if isinstance(cfg.get(group, None), DictConfig) else None
+    name = node.get("name") if node is not None else None
+    return f"{group}={name}" if isinstance(name, str) else None
+
+
+def _group_names() -> set[str]:
+    """The config groups (folders under conf/): their nodes are not schema settings."""
+    return {p.name for p in CONF_DIR.iterdir() if p.is_dir()} if CONF_DIR.is_dir() else set()
+
+
+def _first_line(exc: BaseException) -> str:
+    return (str(exc).strip().splitlines() or [type(exc).__name__])[0]
+
+
+# --------------------------------------------------------------------------- relations
+def _get(cfg: DictConfig, key: str) -> Any:
+    value = OmegaConf.select(cfg, key, default=None)
+    if isinstance(value, (DictConfig, ListConfig)):
+        return OmegaConf.to_container(value, resolve=True)
+    return value
+
+
+def _relations(cfg: DictConfig) -> list[str]:
+    """Checks that involve several settings (ranges are fine when this runs)."""
+    found: list[str] = []
+    per_joint = PER_JOINT + ("controller.K_ji", "controller.D_ji")  # the last two: controller=hqp
+    lengths = {key: len(v) for key in per_joint if isinstance(v := _get(cfg, key), list)}
+    if len(set(lengths.values())) > 1:  # name the odd ones against the most common length
+        counts = [n for n in lengths.values()]
+        joints = max(set(counts), key=counts.count)
+        agree = ", ".join(k for k, n in lengths.items() if n == joints)
+        for key, n in lengths.items():
+            if n != joints:
+                found.append(
+                    f"{key} has {n} values; the other per-joint settings ({agree}) have {joints}: "
+                    "give one value per joint."
+                )
+    for key in QUATERNIONS:
+        quat = _get(cfg, key)
+        if isinstance(quat, list) and len(quat) == 4 and abs(math.hypot(*quat) - 1.0) > UNIT_TOLERANCE:
+            found.append(
+                f"{key} must be a unit quaternion [w, x, y, z] (norm 1 within {UNIT_TOLERANCE:g}); "
+                f"got {show(quat)} (norm {math.hypot(*quat):.6g})."
+            )
+    has_target = _get(cfg, "target.name") not in (None, "none")
+    stroke = _get(cfg, "task.stroke")
+    if has_target and isinstance(stroke, list) and not any(stroke):
+        found.append(f"task.stroke must be a non-zero vector (start → seat) [m]; got {show(stroke)}.")
+    if not has_target and _get(cfg, "task.init_pos") is None:
+        found.append(
+            "task.init_pos must be set when there is no target (target=none): the start pose "
+            "cannot be derived from a socket; got null."
+        )
+    overshoot, press, settle = (
+        _get(cfg, f"task.{k}") for k in ("insertion_overshoot", "press_duration", "settle_time")
+    )
+    if has_target and overshoot and press is not None and settle is not None and press > settle:
+        found.append(
+            f"task.press_duration must be at most task.settle_time = {settle:g} s (the press of "
+            f"task.insertion_overshoot happens while the run settles); got {press:g}."
+        )
+    found += _misalignment(cfg, has_target)
+    found += _interface(cfg, has_target)
+    return found
+
+
+def _misalignment(cfg: DictConfig, has_target: bool) -> list[str]:
+    settings = _get(cfg, "task.misalignment")
+    if not isinstance(settings, dict):
+        return []
+    found = []
+    for name in ("x", "y", "yaw_deg", "tilt_deg"):
+        key = f"task.misalignment.{name}"
+        bounds = settings.get(f"{name}_range")
+        if bounds is not None and len(bounds) == 2 and bounds[0] > bounds[1]:
+            found.append(f"{key}_range must be [low, high] with low <= high; got {show(bounds)}.")
+        if bounds is not None and settings.get(name):
+            found.append(
+                f"{key} = {settings[name]:g} and {key}_range are both set: set one of them "
+                "(the range draws the value)."
+            )
+        if not has_target and (settings.get(name) or bounds is not None):
+            found.append(f"{key} needs a socket: target=none has none; got {show(settings.get(name))}.")
+    return found
+
+
+#: the parametric parts' own checks, by geometry schema
+_PART_CHECKS: dict[type, Callable[[Any, str], list[str]]] = {
+    geometry.PlugGeometry: geometry.plug_problems,
+    geometry.SocketGeometry: geometry.socket_problems,
+    keyed.KeyedPlugGeometry: keyed.keyed_plug_problems,
+    keyed.KeyedSocketGeometry: keyed.keyed_socket_problems,
+}
+#: parametric (plug, socket) pairs that mate, with their fit check
+_PAIR_CHECKS: dict[tuple[type, type], Callable[[Any, Any, str, str], list[str]]] = {
+    (geometry.PlugGeometry, geometry.SocketGeometry): geometry.fit_problems,
+    (keyed.KeyedPlugGeometry, keyed.KeyedSocketGeometry): keyed.keyed_fit_problems,
+}
+
+
+def _interface(cfg: DictConfig, has_target: bool) -> list[str]:
+    """The parametric plug, socket and contact (fragment files are checked when loaded)."""
+    found: list[str] = []
+    parts: dict[str, type | None] = {}
+    for kind in ("tool", "target"):
+        node = cfg.get(kind)
+        if kind == "target" and not has_target:
+            continue
+        if not isinstance(node, DictConfig) or node.get("mjcf") or "geometry" not in node:
+            continue
+        schema = OmegaConf.get_type(node, "geometry")
+        parts[kind] = schema
+        check_part = _PART_CHECKS.get(schema)  # type: ignore[arg-type]
+        if check_part is not None:
+            found += check_part(node.geometry, f"{kind}.geometry")
+    if has_target and isinstance(cfg.get("target"), DictConfig) and "contact" in cfg.target:
+        found += geometry.contact_problems(cfg.target.contact, "target.contact")
+    if found or set(parts) != {"tool", "target"}:
+        return found
+    fit = _PAIR_CHECKS.get((parts["tool"], parts["target"]))  # type: ignore[arg-type]
+    if fit is None:
+        return [
+            f"tool={cfg.tool.name} and target={cfg.target.name} are not a mating pair: use "
+            "tool=cone_plug target=cone_socket or tool=keyed_plug target=keyed_socket, or a "
+            "fragment file via tool.mjcf / target.mjcf."
+        ]
+    return fit(cfg.tool.geometry, cfg.target.geometry, "tool.geometry", "target.geometry")
+
+
+# --------------------------------------------------------------------------- memory
+def run_length(cfg: DictConfig) -> tuple[float, str] | None:
+    """The run's simulated time and where it comes from, when the config alone gives it:
+    ``task.duration``, or the planner's ``trajectory.duration`` + ``task.settle_time``
+    (other planners' durations follow from the scene: the simulation checks them)."""
+    duration = _get(cfg, "task.duration")
+    if duration is not None:
+        return float(duration), f"task.duration = {duration:g} s"
+    planned, settle = _get(cfg, "trajectory.duration"), _get(cfg, "task.settle_time")
+    if isinstance(planned, (int, float)) and isinstance(settle, (int, float)):
+        return float(planned + settle), (
+            f"trajectory.duration + task.settle_time = {planned:g} + {settle:g} s"
+        )
+    return None
+
+
+def memory_problem(cfg: DictConfig, n_steps: int | None = None, available: int | None = None) -> str | None:
+    """Why the run of ``cfg`` cannot keep its logs in memory, or None.
+
+    ``n_steps``: the exact step count (the simulation knows it); by default the one
+    :func:`run_length` gives, if any. ``available``: bytes of memory (default:
+    :func:`available_memory`).
+    """
+    timestep = _get(cfg, "physics.timestep")
+    length = run_length(cfg)
+    steps: float
+    if n_steps is not None:
+        steps = float(n_steps)
+    elif length is None or not isinstance(timestep, (int, float)) or not timestep > 0:
+        return None
+    else:
+        steps = length[0] / timestep
+    needed = steps * BYTES_PER_STEP
+    available = available_memory() if available is None else available
+    if available is None or needed <= available:
+        return None
+    source = length[1] if length is not None else "the planned trajectory + task.settle_time"
+    return (
+        f"the run would simulate {steps:.3g} steps ({source} at physics.timestep = "
+        f"{timestep:g} s) and its logs would need about {_bytes(needed)} of memory, more than "
+        f"the {_bytes(available)} available: shorten the run (task.duration, or the trajectory "
+        "and task.settle_time) or raise physics.timestep."
+    )
+
+
+def available_memory() -> int | None:
+    """Bytes of memory available to a new allocation (Linux: MemAvailable), or None."""
+    try:
+        with open("/proc/meminfo", encoding="ascii") as meminfo:
+            for line in meminfo:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    try:
+        return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (ValueError, OSError, AttributeError):
+        return None
+
+
+def _bytes(n: float) -> str:
+    """``1.5e12`` → ``"1.5 TB"``."""
+    units = ("B", "kB", "MB", "GB", "TB", "PB", "EB")
+    power = min(int(math.log10(n) // 3), len(units) - 1) if n >= 1 and math.isfinite(n) else 0
+    return f"{n / 1000**power:.3g} {units[power]}" if math.isfinite(n) else "unbounded"

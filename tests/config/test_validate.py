@@ -1,0 +1,262 @@
+"""Every bad value is refused before anything runs, naming its config key.
+
+The cases are generated from the schemas: every numeric leaf of the composed config of
+every option of every group (list items included) is set to NaN, to inf and to a value
+just outside the range its schema field declares (compliant_docking/config/ranges.py), and
+:func:`compliant_docking.config.validate.check` must refuse each, in a message that names
+the key. A new numeric key is covered as soon as it exists: it must declare a range
+(:func:`test_every_numeric_field_declares_a_range`) and then gets its three cases.
+That the command line runs this check before Hydra writes a run or sweep directory is
+tested end to end in tests/sweep/test_guard.py.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import typing
+
+import pytest
+from omegaconf import DictConfig, ListConfig, OmegaConf
+from omegaconf.errors import OmegaConfBaseException
+
+from compliant_docking import CONF_DIR
+from compliant_docking.config import geometry, schemas
+from compliant_docking.config.ranges import Range, field_range, show
+from compliant_docking.config.store import _SCHEMAS
+from compliant_docking.config.validate import (
+    BYTES_PER_STEP,
+    ConfigError,
+    check,
+    memory_problem,
+    validate,
+)
+from tests.helpers import make_cfg
+
+#: what an option needs beside it to make a config that runs (free-space options)
+COMPANIONS = {
+    ("tool", "keyed_plug"): ("target=keyed_socket",),
+    ("target", "keyed_socket"): ("tool=keyed_plug",),
+    ("target", "none"): ("trajectory=hold", "task.init_pos=[0.55,0,0.35]"),
+    ("trajectory", "tracking"): ("target=none", "task=tracking"),
+    ("task", "tracking"): ("target=none", "trajectory=tracking"),
+}
+
+
+def _options() -> list[tuple[str, str]]:
+    return [(group, path.stem) for group in _SCHEMAS for path in sorted((CONF_DIR / group).glob("*.yaml"))]
+
+
+def _baseline(group: str, option: str) -> DictConfig:
+    return make_cfg(f"{group}={option}", *COMPANIONS.get((group, option), ()))
+
+
+# --------------------------------------------------------------------------- the declarations
+def _is_numeric(annotation) -> bool:
+    """float, int, List[float], Optional[...], tuple[float, ...] (bool is not a number here)."""
+    if annotation in (float, int):
+        return True
+    return any(_is_numeric(arg) for arg in typing.get_args(annotation) if arg is not type(None))
+
+
+def _schema_classes() -> list[type]:
+    return [
+        obj
+        for module in (schemas, geometry)
+        for obj in vars(module).values()
+        if dataclasses.is_dataclass(obj) and obj.__module__ == module.__name__
+    ]
+
+
+@pytest.mark.parametrize("cls", _schema_classes(), ids=lambda c: c.__name__)
+def test_every_numeric_field_declares_a_range(cls):
+    hints = typing.get_type_hints(cls)
+    undeclared = [
+        f.name for f in dataclasses.fields(cls) if _is_numeric(hints[f.name]) and field_range(f) is None
+    ]
+    assert not undeclared, (
+        f"{cls.__name__}: {undeclared} are numbers without a declared range; declare one "
+        "(compliant_docking/config/ranges.py: positive(), within(...), …)"
+    )
+
+
+def test_the_range_check_sees_an_undeclared_number():
+    """The declaration check can fail: a plain MISSING number is flagged."""
+
+    @dataclasses.dataclass
+    class Plain:
+        k: float = dataclasses.field(default=None)  # type: ignore[assignment]
+
+    assert (
+        _is_numeric(typing.get_type_hints(Plain)["k"]) and field_range(dataclasses.fields(Plain)[0]) is None
+    )
+
+
+@pytest.mark.parametrize(
+    ("rng", "inside", "outside", "text"),
+    [
+        (Range(0.0, 0.01, low_open=True, unit="s"), [1e-9, 0.01], [0.0, 0.011, -1.0], "in (0, 0.01] s"),
+        (Range(0.0, math.inf, low_open=True), [1e-300, 1e300], [0.0, -1e-9], "> 0"),
+        (Range(12, 128, integer=True), [12, 128], [11, 129, 12.5], "an integer in [12, 128]"),
+        (Range(integer=True, choices=(1.0, 3.0, 4.0, 6.0)), [1, 6], [2, 0], "one of 1, 3, 4, 6"),
+    ],
+)
+def test_a_range_holds_what_it_says(rng, inside, outside, text):
+    assert all(rng.contains(v) for v in inside)
+    assert not any(rng.contains(v) for v in outside)
+    assert not rng.contains(rng.outside())
+    assert text in rng.describe()
+
+
+# --------------------------------------------------------------------------- generated cases
+def _leaves(node: DictConfig, prefix: str):
+    """(key, container, index or name, range, size of a null list) of every numeric leaf."""
+    fields = {f.name: f for f in dataclasses.fields(OmegaConf.get_type(node))}
+    for name in node:
+        child = node._get_node(name)
+        if isinstance(child, DictConfig):
+            yield from _leaves(node[name], f"{prefix}.{name}")
+            continue
+        rng = field_range(fields[str(name)])
+        if rng is None:
+            continue
+        value = node[name]
+        if isinstance(value, ListConfig):
+            for i in range(len(value)):
+                yield f"{prefix}.{name}[{i}]", value, i, rng.at(i), None
+        else:
+            yield f"{prefix}.{name}", node, name, rng, rng.size if value is None else None
+
+
+def _bad_values(rng: Range) -> list[float]:
+    outside = rng.outside()
+    return [math.nan, math.inf] + ([outside] if outside is not None else [])
+
+
+@pytest.mark.parametrize(("group", "option"), _options())
+def test_every_numeric_leaf_refuses_nan_inf_and_out_of_range(group, option):
+    cfg = _baseline(group, option)
+    assert check(cfg) == [], f"conf/{group}/{option}.yaml (with {COMPANIONS.get((group, option))}) is refused"
+    failures, cases = [], 0
+    for key, container, index, rng, null_size in list(_leaves(cfg[group], group)):
+        saved = container._get_node(index)._value()  # raw: keeps an interpolation as it was
+        for bad in _bad_values(rng):
+            cases += 1
+            value = [bad] * null_size if null_size else bad
+            try:
+                container[index] = value
+            except OmegaConfBaseException as exc:  # an int field: refused as at composition
+                if key.split("[")[0] not in str(exc):
+                    failures.append(f"{key}={show(value)}: the type error does not name the key: {exc}")
+                continue
+            try:
+                problems = check(cfg)
+            finally:
+                container[index] = saved
+            named = [p for p in problems if key.split("[")[0] in p]
+            if not named:
+                failures.append(f"{key}={show(value)}: not refused, or not by name: {problems}")
+            elif not any(show(bad) in p for p in named):
+                failures.append(f"{key}={show(value)}: the message does not show the value: {named}")
+    assert check(cfg) == []  # every value restored
+    schema = OmegaConf.get_type(cfg[group])
+    assert cases > 0 or not any(
+        field_range(f) for f in dataclasses.fields(schema)
+    )  # target=none, render=none
+    assert not failures, f"{len(failures)} of {cases} cases:\n" + "\n".join(failures)
+
+
+# --------------------------------------------------------------------------- keys
+@pytest.mark.parametrize(
+    ("override", "named", "suggested"),
+    [
+        ("+physcs.timestep=0.002", "physcs.timestep", "physics.timestep"),
+        ("++physics.timstep=0.002", "physics.timstep", "physics.timestep"),
+        ("+controller.kk=1", "controller.kk", "controller.k"),
+        ("++task.gate.depth_tolerance=0.1", "task.gate.depth_tolerance", "task.gate.depth_tolerance_m"),
+        ("+target.geometry.radial_clearence=1e-3", "radial_clearence", "target.geometry.radial_clearance"),
+        ("+tool.geometry.extra.depth=1", "tool.geometry.extra.depth", "tool.geometry.radius"),
+    ],
+)
+def test_misspelled_keys_added_with_plus_are_refused_with_the_nearest_keys(override, named, suggested):
+    problems = check(make_cfg(override))
+    assert len(problems) == 1, problems
+    assert named in problems[0] and suggested in problems[0]
+    assert "Config" not in problems[0] and "Geometry" not in problems[0]  # keys, not class names
+
+
+@pytest.mark.parametrize(
+    "overrides",
+    [
+        ("+experiment=controller_comparison",),
+        ("+experiment=clearance",),
+        ("+experiment=misalignment",),
+        ("+experiment=misalignment_keyed",),
+        ("+experiment=tracking_gate", "robot=fr3"),
+        ("physics=earth", "controller=hqp", "robot=fr3"),
+        ("render=video",),
+    ],
+)
+def test_legitimate_appends_and_presets_pass(overrides):
+    assert check(make_cfg(*overrides)) == []
+
+
+# --------------------------------------------------------------------------- relations, memory
+@pytest.mark.parametrize(
+    ("overrides", "message"),
+    [
+        (("robot.max_torque=[1,1]",), "robot.max_torque has 2 values"),
+        (("controller=hqp", "controller.K_ji=[1,1,1]"), "controller.K_ji has 3 values"),
+        (("target.quat=[1,0,0,0.1]",), "target.quat must be a unit quaternion"),
+        (("task.stroke=[0,0,0]",), "task.stroke must be a non-zero vector"),
+        (("task.press_duration=5",), "task.press_duration must be at most task.settle_time"),
+        (("task.misalignment.x=0.001", "task.misalignment.x_range=[0,0.002]"), "are both set"),
+        (("task.misalignment.x_range=[0.002,0.001]",), "low <= high"),
+        (("target.geometry.radial_clearance=0.02",), "target.geometry.radial_clearance must be > 0 and <"),
+        (("tool.geometry.chamfer_length=0.02",), "tool.geometry.chamfer_length must be at most"),
+        (("tool.geometry.length=0.02",), "tool.geometry.length must be longer than target.geometry"),
+        (("target.contact.solimp=[0.99,0.95,0.001,0.5,2]",), "target.contact.solimp must have dmin <= dmax"),
+        (("target=none", "trajectory=hold"), "task.init_pos must be set"),
+        (("tool=keyed_plug",), "target.geometry.plug_radius cannot be resolved"),
+        (
+            ("tool=keyed_plug", "target.geometry.plug_radius=0.01"),
+            "tool=keyed_plug and target=cone_socket are not a mating pair",
+        ),
+        (
+            ("tool=keyed_plug", "target=keyed_socket", "target.geometry.sides=6"),
+            "target.geometry.sides must equal",
+        ),
+        (
+            ("tool=keyed_plug", "target=keyed_socket", "target.geometry.clearance=0.02"),
+            "target.geometry.clearance must be",
+        ),
+    ],
+)
+def test_relations_between_settings_are_checked_by_key(overrides, message):
+    problems = check(make_cfg(*overrides))
+    assert any(message in p for p in problems), problems
+
+
+def test_a_run_whose_logs_do_not_fit_in_memory_is_refused_with_the_estimate():
+    cfg = make_cfg("task.duration=1e9")
+    problem = memory_problem(cfg, available=8 * 10**9)
+    assert "1e+12 steps" in problem and "task.duration = 1e+09 s" in problem
+    assert "2 PB" in problem and "8 GB available" in problem  # BYTES_PER_STEP = 2 kB
+    assert BYTES_PER_STEP == 2000
+    # the default run (18 000 steps, 36 MB) fits; the trajectory's duration counts when
+    # task.duration is null
+    assert memory_problem(make_cfg(), available=8 * 10**9) is None
+    long = memory_problem(make_cfg("trajectory.duration=1e7"), available=8 * 10**9)
+    assert "trajectory.duration + task.settle_time" in long
+    with pytest.raises(ConfigError, match="logs would need about"):
+        validate(make_cfg("task.duration=1e9"))
+
+
+def test_a_refusal_is_one_paragraph_per_problem():
+    with pytest.raises(ConfigError) as caught:
+        validate(make_cfg("physics.timestep=0", "controller.k=nan"))
+    error = caught.value
+    assert len(error.problems) == 2 and all("\n" not in p for p in error.problems)
+    assert error.report().splitlines()[0].endswith("nothing was run or written.")
+    assert "physics.timestep must be a finite number in (0, 0.01] s; got 0.0." in error.problems
+    assert "n/a" not in error.report()
