@@ -46,7 +46,7 @@ def load_runs(path: str | os.PathLike = "runs") -> pd.DataFrame:
     Columns, in this order:
 
     - ``run_dir`` (absolute path, str) and ``job`` (the directory's name);
-    - ``status`` ("ok", "incomplete", "failed"), ``error`` (None or one line),
+    - ``status`` ("ok", "incomplete", "failed", "interrupted"), ``error`` (None or one line),
       ``success`` (bool, or None for runs without a gate);
     - one column per command-line override of any job, named by its key without
       Hydra's prefixes: ``controller``, ``robot``, ``target.geometry.radial_clearance``,

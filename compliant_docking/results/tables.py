@@ -31,6 +31,10 @@ SUCCESS_SECTION = "success"
 REPEAT_KEYS = re.compile(r"(^|\.)seed$")
 #: overrides that change how a job reports, not what it simulates
 COSMETIC_KEYS = frozenset({"task.progress"})
+#: statuses counted as failed: an error, or a run stopped by Ctrl-C / SIGTERM
+FAILED_STATUSES = ("failed", "interrupted")
+#: statuses whose metrics do not measure a whole run (left out of the comparison's means)
+NOT_MEASURED = ("interrupted",)
 
 
 def configuration_keys(df: pd.DataFrame) -> list[str]:
@@ -95,8 +99,9 @@ def comparison_table(df: pd.DataFrame, keys: list[str] | None = None) -> pd.Data
 
     Metrics are the mean over the finished jobs of a configuration (repeats: seeds),
     in display units (mm, deg, N, %); the ``success`` section holds ``jobs``,
-    ``failed`` (status failed), ``docked`` (success true) and ``success rate``
-    (docked / jobs). Columns keep the order in which configurations first appear.
+    ``failed`` (status failed or interrupted), ``docked`` (success true) and ``success
+    rate`` (docked / jobs). An interrupted job's metrics cover only the part that ran: they
+    are left out of the means. Columns keep the order in which configurations first appear.
     One pandas groupby over the configuration labels (benchmarks/comparison_table.py).
     """
     labels = configuration_labels(df, keys)
@@ -113,11 +118,13 @@ def comparison_table(df: pd.DataFrame, keys: list[str] | None = None) -> pd.Data
         {m.key: pd.to_numeric(df[m.key], errors="coerce") if m.key in df else np.nan for m in metrics},
         index=df.index,
     )
+    if "status" in df:  # an interrupted job measured only the part that ran
+        values.loc[df["status"].isin(NOT_MEASURED)] = np.nan
     means = values.groupby(by, sort=False).mean() * [m.scale for m in metrics]  # NaN: no value
     outcome = pd.DataFrame(
         {
             "jobs": 1.0,
-            "failed": (df["status"] == "failed").astype(float),
+            "failed": df["status"].isin(FAILED_STATUSES).astype(float),
             "docked": (df["success"] == True).astype(float) if "success" in df else 0.0,  # noqa: E712
         },
         index=df.index,
@@ -213,7 +220,7 @@ class Counts:
     jobs: int
     ok: int  # status ok
     incomplete: int
-    failed: int  # status failed
+    failed: int  # status failed or interrupted
     docked: int  # success true
     unfinished: int = 0  # job directories without a finished metrics.json
 
@@ -237,7 +244,7 @@ def counts(df: pd.DataFrame, unfinished: int = 0) -> Counts:
         jobs=len(df),
         ok=int((status == "ok").sum()),
         incomplete=int((status == "incomplete").sum()),
-        failed=int((status == "failed").sum()),
+        failed=int(status.isin(FAILED_STATUSES).sum()),
         docked=int((success == True).sum()),  # noqa: E712
         unfinished=unfinished,
     )

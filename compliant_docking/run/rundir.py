@@ -7,6 +7,7 @@ A job directory (docs/run_directory.md) holds::
     timeseries.parquet  one row per control step (columns: compliant_docking.sim.telemetry)
     summary.txt         the console summary
     figures/            per-run figures (PNG + PDF)
+    mujoco.log          MuJoCo's warnings, when there were any
     .hydra/             Hydra's composed config, its own config and the overrides
 
 Every writer here replaces its file atomically (temporary name, then rename); readers
@@ -17,8 +18,10 @@ from __future__ import annotations
 
 import json
 import os
+import random
 import re
 import shutil
+import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -27,7 +30,7 @@ import numpy as np
 import yaml
 
 from compliant_docking.evaluation.registry import finite_or_none
-from compliant_docking.run.files import atomic_write, atomic_write_text
+from compliant_docking.run.files import atomic_write, atomic_write_text, temporary_name
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -36,6 +39,7 @@ METRICS_FILE = "metrics.json"
 TIMESERIES_FILE = "timeseries.parquet"
 SUMMARY_FILE = "summary.txt"
 FIGURES_DIR = "figures"
+MUJOCO_LOG_FILE = "mujoco.log"  # MuJoCo's warnings, when there were any
 HYDRA_DIR = ".hydra"
 CONFIG_FILE = "config.yaml"  # in HYDRA_DIR: the job's composed config
 OVERRIDES_FILE = "overrides.yaml"  # in HYDRA_DIR: the job's command-line overrides
@@ -107,15 +111,81 @@ def write_summary_text(job_dir: Path, text: str) -> None:
 
 
 def write_figures(job_dir: Path, draw: Callable[[Path], object]) -> None:
-    """Draw the figures into a temporary folder with ``draw(folder)``, then put it in place
-    of ``figures/`` (a reader sees the old folder or the new one, never half of one)."""
+    """Draw the figures into a temporary folder of this writer with ``draw(folder)``, then
+    put it in place of ``figures/`` (a reader sees the old folder or the new one, never
+    half of one; an old folder is first moved aside, then removed)."""
     job_dir = Path(job_dir)
-    tmp = job_dir / f".{FIGURES_DIR}.tmp"
-    shutil.rmtree(tmp, ignore_errors=True)
-    draw(tmp)
+    tmp = temporary_name(job_dir / FIGURES_DIR)
     final = job_dir / FIGURES_DIR
-    shutil.rmtree(final, ignore_errors=True)
-    os.replace(tmp, final)
+    try:
+        draw(tmp)
+        for attempt in range(100):  # another writer may put its folder in place meanwhile
+            if attempt:
+                time.sleep(random.uniform(0.0, 0.01))
+            if final.exists():
+                aside = temporary_name(final)
+                try:
+                    os.replace(final, aside)
+                except FileNotFoundError:
+                    continue
+                shutil.rmtree(aside, ignore_errors=True)
+            try:
+                os.replace(tmp, final)
+                return
+            except OSError:  # a folder appeared at the final name: move it aside again
+                continue
+        raise OSError(f"could not put the figures in place in {job_dir}")
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+def write_mujoco_log(job_dir: Path, messages: list[str]) -> None:
+    """mujoco.log: MuJoCo's warnings during the run, one per line (compliant_docking/sim/mjlog.py)."""
+    atomic_write_text(Path(job_dir) / MUJOCO_LOG_FILE, "".join(f"{m}\n" for m in messages))
+
+
+#: the first bytes of a figure file of each kind
+_MAGIC = {".png": b"\x89PNG\r\n\x1a\n", ".pdf": b"%PDF"}
+
+
+def artefact_problem(job_dir: Path, record: dict) -> str | None:
+    """Why the files of a finished job (its ``metrics.json`` read as ``record``) cannot be
+    trusted, or None: the time series must be readable with one row per step, the summary
+    present, the video (if the record names one) and the figures non-empty files."""
+    import pyarrow.parquet as pq
+
+    job_dir = Path(job_dir)
+    path = job_dir / TIMESERIES_FILE
+    if not path.is_file():
+        return f"{TIMESERIES_FILE} is missing"
+    try:
+        rows = pq.read_table(path).num_rows  # every page: a truncated or corrupt file fails here
+    except Exception as exc:
+        return f"{TIMESERIES_FILE} cannot be read ({type(exc).__name__}: {_first_line(exc)})"
+    steps = record.get("steps")
+    if isinstance(steps, int) and rows != steps:
+        return f"{TIMESERIES_FILE} has {rows} rows, {METRICS_FILE} says {steps} steps"
+    if not (job_dir / SUMMARY_FILE).is_file():
+        return f"{SUMMARY_FILE} is missing"
+    video = record.get("video")
+    if isinstance(video, str) and not _nonempty(job_dir / video):
+        return f"the video {video} is missing or empty"
+    for figure in sorted((job_dir / FIGURES_DIR).glob("*")) if (job_dir / FIGURES_DIR).is_dir() else []:
+        magic = _MAGIC.get(figure.suffix)
+        if not _nonempty(figure) or (magic and not figure.read_bytes()[: len(magic)] == magic):
+            return f"the figure {FIGURES_DIR}/{figure.name} is empty or broken"
+    return None
+
+
+def _nonempty(path: Path) -> bool:
+    try:
+        return path.stat().st_size > 0
+    except OSError:
+        return False
+
+
+def _first_line(exc: BaseException) -> str:
+    return (str(exc).strip().splitlines() or [""])[0][:200]
 
 
 def read_config(job_dir: Path) -> dict | None:

@@ -1,17 +1,22 @@
 """One job, from a composed config to a finished run directory.
 
-:func:`execute` never raises: whatever happens, the run directory ends with a
-``metrics.json`` whose ``status`` is "ok", "incomplete" (shorter than its trajectory)
-or "failed" (with ``error``: a one-line reason). Every file is written atomically
+Whatever happens, :func:`execute` ends the run directory with a ``metrics.json`` whose
+``status`` is "ok", "incomplete" (shorter than its trajectory), "failed" (with ``error``:
+a one-line reason) or "interrupted" (Ctrl-C or SIGTERM: the time series so far is kept,
+and the interruption is raised again once the record is written). Every file is written atomically
 (temporary name, then rename), and ``metrics.json`` last, so a directory holding a
 ``metrics.json`` is finished. See docs/run_directory.md for the layout.
 """
 
 from __future__ import annotations
 
+import contextlib
+import signal
 import sys
+import threading
 import time
 import traceback
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -33,13 +38,25 @@ def _one_line(exc: BaseException) -> str:
     return text if isinstance(exc, (ValueError, RuntimeError)) else f"{type(exc).__name__}: {text}"
 
 
-def execute(cfg: DictConfig, out_dir: Path, *, figures: bool | None = None, echo: bool = True) -> dict:
-    """Run the job of ``cfg`` into ``out_dir``; returns the metrics record (never raises).
+class Terminated(KeyboardInterrupt):
+    """SIGTERM during a single run (the command line's handler raises it): handled like
+    Ctrl-C, the run is recorded as interrupted and the command exits 143."""
 
-    The record starts with the fields naming the job (config choices, overrides).
-    ``figures``: draw the per-run figures; None: as the config's ``figures`` says for a
-    single run (:func:`compliant_docking.run.figures.wanted`).
+    signum = signal.SIGTERM
+
+
+def execute(cfg: DictConfig, out_dir: Path, *, figures: bool | None = None, echo: bool = True) -> dict:
+    """Run the job of ``cfg`` into ``out_dir``; returns the metrics record.
+
+    The record starts with the fields naming the job (config choices, overrides). A
+    failure of any kind is recorded (status "failed" and the reason), never raised. An
+    interruption (Ctrl-C: KeyboardInterrupt; SIGTERM: :class:`Terminated`) is recorded as
+    status "interrupted" with the time series simulated so far, then raised again so the
+    caller stops. ``figures``: draw the per-run figures; None: as the config's
+    ``figures`` says for a single run (:func:`compliant_docking.run.figures.wanted`).
     """
+    from compliant_docking.config.validate import validate
+    from compliant_docking.sim import mjlog
     from compliant_docking.sim.simulate import Diverged, prepare
 
     if figures is None:
@@ -52,48 +69,102 @@ def execute(cfg: DictConfig, out_dir: Path, *, figures: bool | None = None, echo
     record.update(dict.fromkeys(DOCKING_KEYS))
     record.update(misalignment_record(cfg))  # true vs believed socket pose (flat keys)
     sim = None
-    try:
-        show: Any = None
-        if cfg.get("viewer"):  # MuJoCo's viewer at real time; refused in a sweep or without a display
-            from compliant_docking.viz import viewer as show
+    interrupted: KeyboardInterrupt | None = None
+    with mjlog.captured() as mujoco_warnings:  # never MUJOCO_LOG.TXT in the working directory
+        try:
+            validate(cfg)  # the command line did already; a run from Python gets the same checks
+            show: Any = None
+            if cfg.get("viewer"):  # MuJoCo's viewer at real time; refused in a sweep or without a display
+                from compliant_docking.viz import viewer as show
 
-            show.check_allowed()
-        sim = prepare(cfg)
-        sim.run(progress=bool(cfg.task.progress) and echo, on_step=show.RealTimeViewer(sim) if show else None)
-        record.update(evaluate(sim, out_dir, figures=figures))
-    except Diverged as exc:
-        record["error"] = str(exc)
-    except Exception as exc:  # a job records its own failure; the sweep goes on
-        record["error"] = _one_line(exc)
-        if not isinstance(exc, ValueError):
-            traceback.print_exc(file=sys.stderr)
-    if sim is not None:
-        steps = sim.telemetry.count
-        record["sim_time_s"] = steps * sim.scene.model.opt.timestep
-        record["steps"] = steps
-        record["real_time_factor"] = (
-            record["sim_time_s"] / sim.loop_wall_time if sim.loop_wall_time > 0 else None
-        )
-        record["loop_wall_time_s"] = sim.loop_wall_time or None
-        record.update(sim.controller.diagnostics())
-    if cfg.get("render") is not None and cfg.render.name != "none":  # docking.mp4 (render.py)
-        from compliant_docking.viz.render import record_video
+                show.check_allowed()
+            sim = prepare(cfg)
+            sim.run(
+                progress=bool(cfg.task.progress) and echo, on_step=show.RealTimeViewer(sim) if show else None
+            )
+            record.update(evaluate(sim, out_dir, figures=figures))
+        except Diverged as exc:
+            record["error"] = str(exc)
+        except Exception as exc:  # a job records its own failure; the sweep goes on
+            record["error"] = _one_line(exc)
+            if not isinstance(exc, ValueError):
+                traceback.print_exc(file=sys.stderr)
+        except KeyboardInterrupt as exc:  # Ctrl-C, SIGTERM: record what there is, then stop
+            interrupted = exc
+    with _signals_deferred() as pending:  # a (second) Ctrl-C must not cut the record short
+        if interrupted is not None:
+            record.update(_interrupted(sim, out_dir, interrupted))
+        if sim is not None:
+            steps = sim.telemetry.count
+            record["sim_time_s"] = steps * sim.scene.model.opt.timestep
+            record["steps"] = steps
+            record["real_time_factor"] = (
+                record["sim_time_s"] / sim.loop_wall_time if sim.loop_wall_time > 0 else None
+            )
+            record["loop_wall_time_s"] = sim.loop_wall_time or None
+            record.update(sim.controller.diagnostics())
+        if interrupted is None and cfg.get("render") is not None and cfg.render.name != "none":
+            from compliant_docking.viz.render import record_video
 
-        record.update(record_video(sim, cfg, out_dir))  # never raises: video_error says why
-    record["wall_time_s"] = time.perf_counter() - started
-    record.update(provenance.collect(cfg, started_at=started_at))  # versions, git, config hash
-    if record["status"] == "failed":
-        record["success"] = False
-    summary = format_summary(record, cfg) + f"\n  run directory: {display_path(out_dir)}"
-    if "video_error" in record:  # render=video: the video, or why there is none
-        from compliant_docking.viz.render import summary_line
+            record.update(record_video(sim, cfg, out_dir))  # never raises: video_error says why
+        record["mujoco_warnings"] = len(mujoco_warnings)
+        if mujoco_warnings:
+            rundir.write_mujoco_log(out_dir, mujoco_warnings)
+        record["wall_time_s"] = time.perf_counter() - started
+        record.update(provenance.collect(cfg, started_at=started_at))  # versions, git, config hash
+        if record["status"] in ("failed", "interrupted"):
+            record["success"] = False
+        summary = format_summary(record, cfg) + f"\n  run directory: {display_path(out_dir)}"
+        if "video_error" in record:  # render=video: the video, or why there is none
+            from compliant_docking.viz.render import summary_line
 
-        summary += summary_line(record)
-    rundir.write_summary_text(out_dir, summary)
-    rundir.write_metrics(out_dir, record)  # last: its presence means "finished"
+            summary += summary_line(record)
+        rundir.write_summary_text(out_dir, summary)
+        rundir.write_metrics(out_dir, record)  # last: its presence means "finished"
     if echo:
         print(summary)
+    if interrupted is not None:
+        raise interrupted
+    if pending:  # Ctrl-C or SIGTERM while the record was written: the run is recorded, now stop
+        raise Terminated() if pending[0] == signal.SIGTERM else KeyboardInterrupt()
     return record
+
+
+def _interrupted(sim, out_dir: Path, exc: KeyboardInterrupt) -> dict:
+    """The record's fields for a run stopped by ``exc``: status "interrupted", the reason,
+    and the metrics and time series of the steps simulated so far."""
+    signum = getattr(exc, "signum", signal.SIGINT)
+    how = {signal.SIGINT: "SIGINT (Ctrl-C)", signal.SIGTERM: "SIGTERM"}.get(signum, f"signal {signum}")
+    fields: dict[str, Any] = {}
+    when = " before the simulation started"
+    if sim is not None and sim.telemetry.count:
+        dt = sim.scene.model.opt.timestep
+        when = f" at t = {sim.telemetry.count * dt:.3f} s of {sim.n_steps * dt:.3f} s"
+        try:
+            fields = evaluate(sim, out_dir, figures=False)  # the partial time series, no figures
+        except Exception as error:
+            when += f" (the metrics of the partial run could not be computed: {_one_line(error)})"
+    fields.update(status="interrupted", success=False, gate_failures=None)
+    return {**fields, "error": f"interrupted by {how}{when}"}
+
+
+@contextlib.contextmanager
+def _signals_deferred() -> Iterator[list[int]]:
+    """Hold SIGINT and SIGTERM while the record is written; the signals that arrived meanwhile
+    are yielded list's items (main thread only: elsewhere Python cannot change handlers)."""
+    pending: list[int] = []
+    if threading.current_thread() is not threading.main_thread():
+        yield pending
+        return
+    saved = {
+        s: signal.signal(s, lambda signum, frame: pending.append(signum))
+        for s in (signal.SIGINT, signal.SIGTERM)
+    }
+    try:
+        yield pending
+    finally:
+        for signum, handler in saved.items():
+            signal.signal(signum, handler)
 
 
 def evaluate(sim, out_dir: Path, *, figures: bool) -> dict:
@@ -172,8 +243,9 @@ def evaluate(sim, out_dir: Path, *, figures: bool) -> dict:
 
 
 def exit_status(record: dict) -> int:
-    """0: succeeded, or finished with no gate to pass (success null); 1: failed; 3: gate not passed."""
-    if record.get("status") == "failed":
+    """0: succeeded, or finished with no gate to pass (success null); 1: failed or
+    interrupted; 3: gate not passed."""
+    if record.get("status") in ("failed", "interrupted"):
         return EXIT_FAILED
     if record.get("status") == "ok" and record.get("success") is None:
         return EXIT_SUCCESS

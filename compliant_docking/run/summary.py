@@ -28,30 +28,36 @@ def format_summary(record: dict, cfg: DictConfig | None = None) -> str:
         ]
 
     rows: list[tuple[str, str | None]] = []
-    for name in ALWAYS:
-        rows += section(name)
-    if r("seat_depth_error_m") is not None or (r("gate_failures") and r("tracking_gate") is None):
-        rows += section(registry.SEAT, "seat, true socket pose")
-    if r("tracking_gate") is not None:  # the free-space tracking gate
-        rows += tracking_rows(record)
-    rows += section(registry.RUN)
-    width = max(len(label) for label, value in rows if value is not None)
+    if r("status") != "failed":  # a failed run measured nothing: its reason, not a table of n/a
+        for name in ALWAYS:
+            rows += section(name)
+        if r("seat_depth_error_m") is not None or (r("gate_failures") and r("tracking_gate") is None):
+            rows += section(registry.SEAT, "seat, true socket pose")
+        if r("tracking_gate") is not None:  # the free-space tracking gate
+            rows += tracking_rows(record)
+        rows += section(registry.RUN)
+    width = max((len(label) for label, value in rows if value is not None), default=0)
     lines = ["=" * RULE_WIDTH, f"compliant-docking: {title}".rstrip(": "), "=" * RULE_WIDTH]
     for label, value in rows:
         lines.append(label if value is None else f"  {label:<{width}} : {value}")
     status = r("status")
     verdict = "success" if r("success") else ("FAILED" if status == "failed" else "not docked")
-    if status != "failed" and r("tracking_gate") is not None:
+    if status == "interrupted":
+        verdict = "INTERRUPTED: the metrics cover the part that ran"
+    elif status != "failed" and r("tracking_gate") is not None:
         verdict = f"tracking gate {r('tracking_gate')}"
     elif status != "failed" and r("success") is None:
         verdict = "no gate"
     success = "null" if r("success") is None else str(bool(r("success"))).lower()
-    lines.append("-" * RULE_WIDTH)
+    if rows:
+        lines.append("-" * RULE_WIDTH)
     lines.append(f"  status {status} · success {success} ({verdict})")
     if r("error"):
         lines.append(f"  error: {r('error')}")
     if r("gate_failures"):
         lines.append(f"  gate: {r('gate_failures')}")
+    if r("mujoco_warnings"):
+        lines.append(f"  MuJoCo warnings: {r('mujoco_warnings')} (mujoco.log in the run directory)")
     return "\n".join(lines)
 
 

@@ -21,6 +21,7 @@ import pinocchio as pin
 from hydra.utils import instantiate
 from omegaconf import DictConfig
 
+from compliant_docking.config.validate import memory_problem
 from compliant_docking.planning.base import (
     Planner,
     PressHome,
@@ -197,6 +198,9 @@ def prepare(cfg: DictConfig) -> Simulation:
     data.qvel[:] = 0.0
     mujoco.mj_forward(model, data)
     n_steps = int(round(duration / model.opt.timestep))
+    too_large = memory_problem(cfg, n_steps=n_steps)  # before the logs are allocated
+    if too_large:
+        raise ValueError(too_large)
     context = ControlContext(
         arm=arm,
         dt=float(model.opt.timestep),

@@ -134,7 +134,9 @@ def _report(
             if independent_jobs
             else f"  to finish it: {again}"
         )
-    failed = frame[frame["status"] == "failed"] if len(frame) else frame
+    from compliant_docking.results.tables import FAILED_STATUSES
+
+    failed = frame[frame["status"].isin(FAILED_STATUSES)] if len(frame) else frame
     for _, row in failed.iterrows():
         lines.append(f"  FAILED {row['job']}: {row.get('error')}")
     if outcome.summary.get("summary.md"):
@@ -185,6 +187,7 @@ def record_orphan(job_dir: Path) -> None:
     import yaml
 
     from compliant_docking.evaluation.registry import compared
+    from compliant_docking.run.files import temporary_name
     from compliant_docking.run.rundir import METRICS_FILE, read_overrides
 
     record: dict = {"status": "failed", "error": ORPHAN_ERROR, "success": False, "interrupted": True}
@@ -199,7 +202,7 @@ def record_orphan(job_dir: Path) -> None:
         record[group] = choices.get(group)
     record.update({m.key: None for m in compared()})
     path = job_dir / METRICS_FILE
-    tmp = path.with_name(f".{path.name}.tmp")
+    tmp = temporary_name(path)
     try:
         tmp.write_text(json.dumps(record, indent=2) + "\n", encoding="utf-8")
         try:

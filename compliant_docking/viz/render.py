@@ -198,7 +198,7 @@ def write_video(
     rows = frame_rows(steps, dt, fps, speed)
     strip = ForceStrip(width, strip_h, np.arange(steps) * dt, axial_force, force_budget) if overlay else None
     path = Path(path)
-    tmp = path.with_name(f".{path.name}.tmp")
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")  # one per writer
     views = None
     try:
         views = _Views(model, width, height - strip_h, options, focus=focus, tool_body=tool_body)

@@ -98,8 +98,11 @@ def test_same_seed_same_draw_and_components_draw_independently():
     [
         ((f"{M}.x=0.001", f"{M}.x_range=[0,0.002]"), "task.misalignment.x = 0.001 and"),
         ((f"{M}.y_range=[0.002,0.001]",), "low <= high"),
-        ((f"{M}.tilt_deg_range=[1]",), "task.misalignment.tilt_deg_range must be [low, high]"),
-        ((f"{M}.tilt_deg=75",), "task.misalignment.tilt_deg must be within"),
+        ((f"{M}.tilt_deg_range=[1]",), "task.misalignment.tilt_deg_range must have 2 values; got 1"),
+        (
+            (f"{M}.tilt_deg=75",),
+            "task.misalignment.tilt_deg must be a finite number in (-60, 60) deg; got 75.0",
+        ),
         ((f"{M}.x_range=[0,0.002]", f"{M}.seed=-1"), "task.misalignment.seed"),
     ],
 )
