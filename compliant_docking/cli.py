@@ -2,11 +2,15 @@
 ``[project.scripts]``, or ``python -m compliant_docking``) — one run, or a sweep with ``-m``.
 
 Exit status: 0 the run succeeded (docked / tracking gate PASS), 1 the run failed
-(error or divergence), 3 the run finished but its gate did not pass.
+(error or divergence) or the command was refused before anything ran (a bad key or
+value: compliant_docking/sweep/guard.py), 3 the run finished but its gate did not pass,
+130 / 143 stopped by Ctrl-C / SIGTERM (a single run records status "interrupted" with
+its time series so far).
 A sweep (``-m``): 1 if any job failed (or its worker died), else 0 — jobs that did not
 dock are results, counted in the summary (compliant_docking/sweep/summary.py); 2 a
-refused ``resume=`` (compliant_docking/sweep/resume.py); 143 stopped by SIGTERM (the
-summary of what finished is written, as after Ctrl-C).
+refused ``resume=`` (compliant_docking/sweep/resume.py); 130 / 143 stopped by Ctrl-C /
+SIGTERM (the summary of what finished is written). No traceback is printed for an
+interruption or a worker process that died; the summary says what happened.
 
 ``--help`` lists the config groups and their options (Hydra's own help would also list
 the typed schemas, which are not choices).
@@ -14,8 +18,11 @@ the typed schemas, which are not choices).
 
 from __future__ import annotations
 
+import contextlib
+import re
 import signal
 import sys
+from collections.abc import Iterator
 from pathlib import Path
 
 import hydra
@@ -27,6 +34,7 @@ from omegaconf import DictConfig, OmegaConf
 from compliant_docking import CONF_DIR
 from compliant_docking.config import compose_cache, register_schemas
 from compliant_docking.sweep import launchers, resume
+from compliant_docking.sweep.guard import Refused, refuse
 from compliant_docking.sweep.session import SweepSession
 
 # Hydra composes each job's config in the launching process and again in the worker that
@@ -49,17 +57,19 @@ class CommandLine:
 
         hydra_cfg = HydraConfig.get()
         out_dir = Path(hydra_cfg.runtime.output_dir)
+        note = None
         if resume.resuming(hydra_cfg):  # resume=<sweep dir>: keep a finished job untouched
-            kept = resume.finished_record(cfg, out_dir)
+            kept, why = resume.assess(cfg, out_dir)
             if kept is not None:
                 self.records.append(kept)
                 return resume.SKIPPED
+            note = resume.rerun_note(why)  # the progress line says why it runs again
             resume.prepare_rerun(cfg, out_dir)
         # in a sweep, each job prints one progress line (SweepCallback), not its summary,
         # and draws no figures unless `figures=true` (report --runs draws them later)
         sweep = hydra_cfg.mode == RunMode.MULTIRUN
         self.records.append(execute(cfg, out_dir, figures=wanted(cfg, sweep=sweep), echo=not sweep))
-        return None
+        return note
 
     def run(self, argv: list[str]) -> int:
         """Run the command ``argv`` (without the program name); the exit status."""
@@ -72,15 +82,22 @@ class CommandLine:
             return resume.fail(exc)
         register_schemas()
         launchers.register_schemas(ConfigStore.instance())  # hydra/launcher=submitit_*
-        if any(arg in ("-m", "--multirun") for arg in argv):
-            signal.signal(signal.SIGTERM, _terminated)  # like Ctrl-C: summarise what finished
+        multirun = any(arg in ("-m", "--multirun") for arg in argv)
+        # SIGTERM: a sweep unwinds like Ctrl-C and summarises what finished; a single run
+        # records itself as interrupted (run/runner.py)
+        previous = signal.signal(signal.SIGTERM, _terminated if multirun else _terminate_run)
         app = hydra.main(version_base="1.3", config_path=str(CONF_DIR), config_name="config")(self.task)
         saved, sys.argv[1:] = sys.argv[1:], argv  # Hydra parses sys.argv
-        with SweepSession.open() as session:
+        with SweepSession.open() as session, _restored(signal.SIGTERM, previous):
             try:
-                app()
-            except (SystemExit, KeyboardInterrupt):
+                with _errors_reported():
+                    app()
+            except Refused:  # nothing was created: nothing to summarise, no resume to suggest
+                raise
+            except (SystemExit, KeyboardInterrupt) as exc:
                 session.finish_aborted()  # a sweep cut short (worker crash, Ctrl-C): summarise it
+                if isinstance(exc, KeyboardInterrupt):  # no traceback: the record says what happened
+                    return 128 + getattr(exc, "signum", signal.SIGINT)
                 raise
             finally:
                 sys.argv[1:] = saved
@@ -104,6 +121,64 @@ def _terminated(signum, frame) -> None:
     """SIGTERM in a sweep (``kill``, Slurm's ``scancel`` of the launching job): unwind
     like Ctrl-C, so the joblib workers are stopped and the summary is written."""
     raise SystemExit(128 + signum)
+
+
+def _terminate_run(signum, frame) -> None:
+    """SIGTERM during a single run: the runner records the run as interrupted (with its
+    time series so far), then the command exits 143."""
+    from compliant_docking.run.runner import Terminated
+
+    raise Terminated()
+
+
+@contextlib.contextmanager
+def _restored(signum: int, handler) -> Iterator[None]:
+    """Put ``handler`` back for ``signum`` at the end (a command run inside a test process)."""
+    try:
+        yield
+    finally:
+        signal.signal(signum, handler)
+
+
+@contextlib.contextmanager
+def _errors_reported() -> Iterator[None]:
+    """Two errors Hydra's error reporter (``hydra._internal.utils.run_and_report``) would
+    print its own way, reported ours: a config that does not compose (an unknown key, a
+    wrong type: one paragraph naming the key and the nearest valid keys, never a schema
+    class, and no hint to append the key with ``+``), and a sweep whose worker process
+    died (joblib's ``TerminatedWorkerError``: one line instead of a traceback; the aborted
+    sweep's summary then says which jobs were lost). Hydra calls its reporter by module
+    lookup, so it is wrapped for this command only.
+    """
+    from hydra._internal import utils as hydra_utils
+    from hydra.errors import ConfigCompositionException
+
+    from compliant_docking.config.validate import composition_problem
+
+    report = hydra_utils.run_and_report
+
+    def run_and_report(func):
+        def guarded():
+            try:
+                return func()
+            except ConfigCompositionException as exc:
+                raise refuse("the configuration is refused", [composition_problem(exc)]) from None
+            except Exception as exc:
+                if type(exc).__name__ not in ("TerminatedWorkerError", "BrokenProcessPool"):
+                    raise
+                first = (str(exc).strip().splitlines() or [type(exc).__name__])[0]
+                codes = re.search(r"exit codes of the workers are \{([^}]*)\}", str(exc))
+                detail = f" (exit codes {codes.group(1)})" if codes else ""
+                print(f"sweep: a worker process died{detail}: {first}", file=sys.stderr, flush=True)
+                raise SystemExit(1) from None
+
+        return report(guarded)
+
+    hydra_utils.run_and_report = run_and_report
+    try:
+        yield
+    finally:
+        hydra_utils.run_and_report = report
 
 
 # --------------------------------------------------------------------------- --help

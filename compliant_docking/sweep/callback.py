@@ -159,8 +159,9 @@ class SweepCallback(Callback):
             out_dir = Path(str(config.hydra.runtime.output_dir))
             sweep_dir = Path(str(config.hydra.sweep.dir)).resolve()
             line = job_line(out_dir, sweep_dir, self.total)
-            if job_return.status == JobStatus.COMPLETED and job_return.return_value == resume.SKIPPED:
-                line = f"{line} · {resume.SKIPPED}"
+            note = job_return.return_value if job_return.status == JobStatus.COMPLETED else None
+            if isinstance(note, str):  # resume: skipped, or why it ran again
+                line = f"{line} · {note}"
             emit(line)
         except Exception as exc:  # progress must never fail a job
             emit(f"(progress line failed: {exc})")

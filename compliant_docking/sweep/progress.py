@@ -90,14 +90,17 @@ def job_line(out_dir: Path, sweep_dir: Path, total: int | None, done: int | None
     status = record.get("status")
     success = record.get("success")
     docked = {True: "docked", False: "not docked", None: "no gate"}.get(success, str(success))
-    parts = [f"{count} {out_dir.name}", "FAILED" if status == "failed" else str(status)]
-    if status != "failed":
+    parts = [
+        f"{count} {out_dir.name}",
+        str(status).upper() if status in ("failed", "interrupted") else str(status),
+    ]
+    if status not in ("failed", "interrupted"):
         parts.append(docked)
         peak = record.get("peak_axial_force_N")
         parts.append("peak n/a" if peak is None else f"peak {peak:.1f} N")
     wall = record.get("wall_time_s")
     parts.append("n/a" if wall is None else f"{wall:.1f} s")
-    if status == "failed" and record.get("error"):
+    if status in ("failed", "interrupted") and record.get("error"):
         parts.append(str(record["error"])[:160])
     return " · ".join(parts)
 

@@ -13,15 +13,17 @@ sweep directory. Resuming runs the same sweep again into the same directory:
   refuses a directory without ``multirun.yaml`` or a command whose task overrides or
   preset lists differ from the ones the sweep was started with (jobs would get other
   numbers and names), and prints what it found.
-- In each job, :func:`finished_record` keeps a job whose ``metrics.json`` has status
-  "ok" or "incomplete" (a finished simulation: a rerun would give the same result), the
-  ``config_hash`` of the job's composed config now, and a time series beside it: the
-  job returns without touching any file of its directory (Hydra writes no ``.hydra/``
-  either: ``hydra.output_subdir=null``). Every other job — failed (including the
-  "interrupted" records an aborted sweep leaves), half-written (no metrics.json, or
-  not valid JSON), from another config, or never started — runs again:
-  :func:`prepare_rerun` removes its previous outputs (``metrics.json`` first, so the
-  directory reads as unfinished from then on) and writes ``.hydra/`` as Hydra would.
+- In each job, :func:`assess` keeps a job whose ``metrics.json`` has status "ok" or
+  "incomplete" (a finished simulation: a rerun would give the same result), the
+  ``config_hash`` of the job's composed config now, and sound files beside it (the time
+  series readable with one row per step, the summary, figures, video): the job returns
+  without touching any file of its directory (Hydra writes no ``.hydra/`` either:
+  ``hydra.output_subdir=null``). Every other job — failed or interrupted, half-written
+  (no metrics.json, or not valid JSON), with a broken artefact, from another config (an
+  edited ``conf/`` file), or never started — runs again, and its progress line says why
+  (``· rerun: <why>``): :func:`prepare_rerun` removes its previous outputs
+  (``metrics.json`` first, so the directory reads as unfinished from then on) and writes
+  ``.hydra/`` as Hydra would.
 - At the end the sweep callback summarises the whole directory as usual: every job, kept
   or rerun, is a row.
 
@@ -42,12 +44,13 @@ from compliant_docking.run.rundir import (
     HYDRA_DIR,
     MULTIRUN_FILE,
     find_job_dirs,
-    has_timeseries,
     read_metrics,
 )
 
 #: the job's return value when :func:`finished_record` kept it (seen by the sweep callback)
 SKIPPED = "skipped: finished earlier with the same config"
+#: the start of the job's return value when a resume reruns it: ``rerun: <why>``
+RERUN = "rerun: "
 #: statuses of a finished simulation: kept by a resume when the config is unchanged
 KEEP_STATUSES = ("ok", "incomplete")
 #: where ``resume=last`` looks for the newest sweep (relative to the working directory)
@@ -206,23 +209,47 @@ def _status_lines(sweep_dir: Path) -> list[str]:
 
 # --------------------------------------------------------------------------- in the job
 def finished_record(cfg, out_dir: Path) -> dict | None:
-    """The stored record of a job that a resume keeps, or None when the job must run.
+    """The stored record of a job that a resume keeps, or None when the job must run
+    (:func:`assess` says why)."""
+    return assess(cfg, out_dir)[0]
+
+
+def assess(cfg, out_dir: Path) -> tuple[dict | None, str]:
+    """(the stored record, "") for a job that a resume keeps; (None, why) when it must run.
 
     Kept: ``metrics.json`` is a JSON object with status "ok" or "incomplete", its
-    ``config_hash`` equals the hash of ``cfg`` (the job's composed config now), and
-    ``timeseries.parquet`` is there.
+    ``config_hash`` equals the hash of ``cfg`` (the job's composed config now), and every
+    artefact beside it is sound (:func:`compliant_docking.run.rundir.artefact_problem`:
+    the time series readable with one row per step, the summary, the figures, the video).
     """
     from compliant_docking.run.provenance import config_hash
+    from compliant_docking.run.rundir import artefact_problem
 
-    record, _ = read_metrics(out_dir)
-    if record is None or record.get("status") not in KEEP_STATUSES:
-        return None
-    stored = record.get("config_hash")
-    if stored is None or stored != config_hash(cfg):
-        return None
-    if not has_timeseries(out_dir):
-        return None
-    return record
+    if not Path(out_dir).is_dir():
+        return None, "it never started"
+    record, problem = read_metrics(out_dir)
+    if record is None:
+        return None, str(problem)
+    status = record.get("status")
+    if status not in KEEP_STATUSES:
+        return None, f"its last attempt {status}: {record.get('error')}"
+    stored, now = record.get("config_hash"), config_hash(cfg)
+    if stored is None:
+        return None, "its metrics.json has no config_hash (written before config hashes)"
+    if stored != now:
+        return None, (
+            f"its config changed since it ran (config hash {stored} → {now}: an edited conf/ "
+            "file, or other defaults)"
+        )
+    problem = artefact_problem(out_dir, record)
+    if problem:
+        return None, problem
+    return record, ""
+
+
+def rerun_note(why: str) -> str:
+    """The job's return value (and progress-line suffix) when a resume reruns it."""
+    return f"{RERUN}{why}"
 
 
 def prepare_rerun(cfg, out_dir: Path) -> None:

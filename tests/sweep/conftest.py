@@ -18,12 +18,14 @@ import pytest
 
 from compliant_docking import REPO_ROOT
 
-#: 3 short jobs (free space, 2-2.5 s simulated); the third fails (a zero duration)
+#: 3 short jobs (free space, 2 s simulated); the third fails: its start is out of reach, a
+#: failure only the run finds (a value the config check refuses, e.g. a zero duration,
+#: refuses the whole sweep before it starts: tests/sweep/test_guard.py)
 JOBS = (
     "trajectory=hold",
-    "trajectory.duration=1,1.5,0",
+    "trajectory.duration=1",
     "target=none",
-    "task.init_pos=[0.55,0,0.35]",
+    "task.init_pos=[0.55,0,0.35],[0.55,0,0.4],[3,0,0.35]",
     "task.settle_time=1",
     "task.progress=false",
 )

@@ -39,21 +39,24 @@ def test_single_run_without_display_is_refused_before_simulating(tmp_path, monke
     assert json.loads((tmp_path / "metrics.json").read_text())["error"] == record["error"]
 
 
-def test_sweep_with_viewer_is_refused_by_hydra_runtime_mode(tmp_path):
-    # the job runs in a worker process, which sees Hydra's runtime mode (MULTIRUN)
+def test_sweep_with_viewer_is_refused_before_anything_runs(tmp_path):
+    """viewer=true in a sweep is refused up front (compliant_docking/sweep/guard.py), not by
+    every job; the runner's own refusal (a job that sees Hydra's MULTIRUN mode) stays for
+    runs started otherwise."""
+    sweep = tmp_path / "sweep"
     result = run_cli(
         "-m",
         "viewer=true",
         "task.duration=0.2",
         "task.progress=false",
         "hydra.launcher.n_jobs=1",
-        f"hydra.sweep.dir={tmp_path}",
+        f"hydra.sweep.dir={sweep}",
         "hydra.callbacks.sweep.figures=false",
     )
-    metrics = [json.loads(p.read_text()) for p in tmp_path.glob("*/metrics.json")]
-    assert len(metrics) == 1, result.stdout + result.stderr
-    assert metrics[0]["status"] == "failed" and "refused in a sweep" in metrics[0]["error"]
     assert result.returncode == 1
+    assert "viewer=true is refused in a sweep (-m)" in result.stderr
+    assert "resume" not in result.stdout + result.stderr and "Traceback" not in result.stderr
+    assert not sweep.exists()
 
 
 # --------------------------------------------------------------------------- pacing
