@@ -17,6 +17,7 @@ given ``out_dir``, also saves it as ``<stem>.png`` (other formats: ``formats``, 
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
@@ -26,7 +27,8 @@ import pandas as pd
 from matplotlib.ticker import MaxNLocator
 
 from compliant_docking.evaluation import registry
-from compliant_docking.results.tables import configuration_keys, configuration_labels
+from compliant_docking.results.load import RunSkippedWarning
+from compliant_docking.results.tables import FAILED_STATUSES, configuration_keys, configuration_labels
 from compliant_docking.run import rundir
 from compliant_docking.sim.telemetry import FORCE, axial_force
 from compliant_docking.viz.plotting import FORMATS, apply_style, check_formats, envelope
@@ -288,7 +290,7 @@ def select_runs(df: pd.DataFrame, max_runs: int = 6) -> pd.DataFrame:
     """One run per configuration (its first finished one), at most ``max_runs``."""
     if df.empty:
         return df
-    finished = df[df["status"] != "failed"]
+    finished = df[~df["status"].isin(FAILED_STATUSES)]
     labels = configuration_labels(finished)
     picked = finished.groupby(labels, sort=False).head(1)
     return picked.head(max_runs)
@@ -316,7 +318,16 @@ def force_overlay(
     for index, row in chosen.iterrows():
         if not rundir.has_timeseries(Path(row["run_dir"])):
             continue
-        ts = rundir.read_timeseries(Path(row["run_dir"]), columns=["t", *FORCE])
+        try:
+            ts = rundir.read_timeseries(Path(row["run_dir"]), columns=["t", *FORCE])
+        except Exception as exc:  # a truncated or corrupt file: leave this run out, say so
+            warnings.warn(
+                f"skipping the time series of {row['run_dir']}: {type(exc).__name__}: "
+                f"{(str(exc).strip().splitlines() or [''])[0][:200]}",
+                RunSkippedWarning,
+                stacklevel=2,
+            )
+            continue
         axis = _docking_axis(Path(row["run_dir"]))
         force = ts[FORCE].to_numpy()
         axial = axial_force(force, axis) if axis is not None else np.linalg.norm(force, axis=1)

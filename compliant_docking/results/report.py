@@ -12,8 +12,11 @@ a sweep directory, a tree of them, or all of ``runs/``. Writes into PATH (or ``-
   joint torques), from its time series — the figures a sweep job leaves out by
   default; written in each run directory, whatever ``--out`` says.
 
-and prints summary.md's counts and comparison. Exit status: 0 when at least one
-finished run was found, 2 when none was (or PATH does not exist, or a format is unknown).
+and prints summary.md's counts and comparison. A job directory whose metrics.json is
+missing or broken, or whose time series cannot be read, is skipped with a message
+naming it. Exit status: 0 when at least one finished run was found, 2 when none was,
+PATH does not exist, a format is unknown, or the tables cannot be written there (a
+read-only directory: ``--out DIR`` writes them elsewhere).
 """
 
 from __future__ import annotations
@@ -25,6 +28,7 @@ from pathlib import Path
 
 from compliant_docking.results.load import RunSkippedWarning, scan
 from compliant_docking.results.tables import counts, write_summary
+from compliant_docking.run.rundir import read_metrics
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -69,20 +73,34 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     frame, skipped = scan(path)
     for job_dir in skipped:
-        print(f"report: skipped {job_dir}: no finished metrics.json", file=sys.stderr)
+        print(f"report: skipped {job_dir}: {read_metrics(job_dir)[1]}", file=sys.stderr)
     if frame.empty:
         print(f"report: no finished runs under {path}", file=sys.stderr)
         return 2
     out = args.out or (path if path.is_dir() else path.parent)
-    paths = write_summary(frame, out, title=f"Runs in {path}", unfinished=skipped)
-    if not args.no_figures:
-        from compliant_docking.results.figures import plot_comparison
-
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", RunSkippedWarning)
-            figures = plot_comparison(frame, out / "comparison", formats)
-    else:
-        figures = []
+    problem = _unwritable(out)
+    if problem:
+        print(
+            f"report: cannot write into {out} ({problem}); write the tables and figures "
+            "elsewhere with --out DIR",
+            file=sys.stderr,
+        )
+        return 2
+    with warnings.catch_warnings(record=True) as caught:  # broken files: skipped, each said
+        warnings.simplefilter("always", RunSkippedWarning)
+        try:
+            paths = write_summary(frame, out, title=f"Runs in {path}", unfinished=skipped)
+            figures = [] if args.no_figures else _figures(frame, out / "comparison", formats)
+        except OSError as exc:
+            print(
+                f"report: cannot write into {out} ({exc.strerror or exc}); write the tables and "
+                "figures elsewhere with --out DIR",
+                file=sys.stderr,
+            )
+            return 2
+    for warning in caught:
+        if issubclass(warning.category, RunSkippedWarning):
+            print(f"report: {warning.message}", file=sys.stderr)
     drawn = draw_runs(frame, formats) if args.runs else 0
     text = paths["summary.md"].read_text(encoding="utf-8")
     print(text.split("\n## Jobs", 1)[0].rstrip())
@@ -98,8 +116,8 @@ def main(argv: list[str] | None = None) -> int:
 
 def draw_runs(frame, formats) -> int:
     """Each run's own figures (:func:`compliant_docking.run.figures.redraw`); how many
-    runs got them. A run that cannot be drawn (failed before its time series) is named
-    on stderr and skipped."""
+    runs got them. A run that cannot be drawn (failed before its time series, a broken
+    time series, a directory it cannot write) is named on stderr and skipped."""
     from compliant_docking.run.figures import redraw
 
     drawn = 0
@@ -107,9 +125,34 @@ def draw_runs(frame, formats) -> int:
         try:
             redraw(Path(run_dir), formats)
             drawn += 1
-        except ValueError as exc:
+        except (ValueError, OSError) as exc:
             print(f"report: no figures for {run_dir}: {exc}", file=sys.stderr)
     return drawn
+
+
+def _figures(frame, out_dir: Path, formats) -> list[Path]:
+    from compliant_docking.results.figures import plot_comparison
+
+    return plot_comparison(frame, out_dir, formats)
+
+
+def _unwritable(out: Path) -> str | None:
+    """Why nothing can be written into ``out`` (or the folder that would hold it), or None.
+    Tried for real with a probe file: permission bits do not tell for root or a
+    read-only file system."""
+    import tempfile
+
+    existing = out
+    while not existing.exists() and existing != existing.parent:
+        existing = existing.parent
+    if not existing.is_dir():
+        return f"{existing} is not a directory"
+    try:
+        with tempfile.NamedTemporaryFile(dir=existing, prefix=".report-probe-"):
+            pass
+    except OSError as exc:
+        return exc.strerror or str(exc)
+    return None
 
 
 if __name__ == "__main__":
