@@ -34,7 +34,7 @@ from omegaconf import DictConfig, OmegaConf
 from compliant_docking import CONF_DIR
 from compliant_docking.config import compose_cache, register_schemas
 from compliant_docking.sweep import launchers, resume
-from compliant_docking.sweep.guard import Refused, refuse
+from compliant_docking.sweep.guard import Refused, refuse, release_empty
 from compliant_docking.sweep.session import SweepSession
 
 # Hydra composes each job's config in the launching process and again in the worker that
@@ -101,6 +101,7 @@ class CommandLine:
                 raise
             finally:
                 sys.argv[1:] = saved
+                release_empty()  # a directory claimed for a command that then wrote nothing
             if session.outcome is not None:  # the jobs ran in worker processes
                 return session.outcome.exit_status
         from compliant_docking.run.runner import exit_status

@@ -240,12 +240,29 @@ def claim(config: DictConfig, kind: str, *, explicit: bool | None = None) -> str
         return (
             f"{key}: cannot create {path}: {exc.strerror or exc}; choose another directory with {key}=<dir>."
         )
+    CLAIMED.append(candidate)
     if candidate != path:
         with read_write(config.hydra):
             OmegaConf.update(config, key, str(candidate))
             if kind == "sweep":  # the jobs compose their config again from the overrides
                 config.hydra.overrides.hydra.append(f"{key}={_quoted(str(candidate))}")
     return None
+
+
+#: the directories :func:`claim` created in this process (see :func:`release_empty`)
+CLAIMED: list[Path] = []
+
+
+def release_empty() -> None:
+    """Remove the directories this process claimed that stayed empty (a sweep sweeper that
+    refused its set-up after the claim, e.g. the tuning sweeper): a refused command leaves
+    nothing behind. A directory with anything in it stays."""
+    while CLAIMED:
+        path = CLAIMED.pop()
+        try:
+            path.rmdir()  # only an empty directory
+        except OSError:
+            pass
 
 
 def _writable(path: Path, key: str) -> str | None:

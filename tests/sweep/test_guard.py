@@ -149,6 +149,17 @@ def test_a_taken_default_name_gets_the_next_free_one(tmp_path):
     assert guard.claim(explicit, "run") is None and explicit.hydra.run.dir == str(run_dir)  # as given
 
 
+def test_a_claimed_directory_that_stayed_empty_is_released(tmp_path):
+    """A sweeper that refuses its set-up after the claim (the tuning sweeper) leaves nothing."""
+    empty, used = tmp_path / "empty", tmp_path / "used"
+    for path in (empty, used):
+        cfg = OmegaConf.create({"hydra": {"sweep": {"dir": str(path)}, "overrides": {"hydra": []}}})
+        assert guard.claim(cfg, "sweep") is None
+    (used / "multirun.yaml").write_text("hydra: {}\n")
+    guard.release_empty()
+    assert not empty.exists() and (used / "multirun.yaml").is_file() and not guard.CLAIMED
+
+
 def _block_the_next_minute(root: Path, pattern: str) -> set[Path]:
     """Create the default directories of the next 90 seconds, so that two commands started
     now both find their name taken and race for the next free one."""
