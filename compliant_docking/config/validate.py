@@ -87,6 +87,9 @@ def check(cfg: DictConfig) -> list[str]:
             found += _unknown(cfg, key, sorted(top), where="")
             continue
         found += _walk(cfg, key, _choice(cfg, key))
+    pair = _pair_problem(cfg)
+    if pair:
+        found.insert(0, pair)
     if found:
         return found
     found += _relations(cfg)
@@ -330,13 +333,28 @@ def _interface(cfg: DictConfig, has_target: bool) -> list[str]:
     if found or set(parts) != {"tool", "target"}:
         return found
     fit = _PAIR_CHECKS.get((parts["tool"], parts["target"]))  # type: ignore[arg-type]
-    if fit is None:
-        return [
-            f"tool={cfg.tool.name} and target={cfg.target.name} are not a mating pair: use "
-            "tool=cone_plug target=cone_socket or tool=keyed_plug target=keyed_socket, or a "
-            "fragment file via tool.mjcf / target.mjcf."
-        ]
-    return fit(cfg.tool.geometry, cfg.target.geometry, "tool.geometry", "target.geometry")
+    return fit(cfg.tool.geometry, cfg.target.geometry, "tool.geometry", "target.geometry") if fit else []
+
+
+def _pair_problem(cfg: DictConfig) -> str | None:
+    """Two parametric parts that do not mate (judged by their schemas alone, so it is
+    said even when their values do not resolve: the cone socket's plug_radius follows
+    ``tool.geometry.radius``, which a keyed plug does not have)."""
+    tool, target = cfg.get("tool"), cfg.get("target")
+    if not (isinstance(tool, DictConfig) and isinstance(target, DictConfig)):
+        return None
+    if target.get("name") == "none" or tool.get("mjcf") or target.get("mjcf"):
+        return None
+    if "geometry" not in tool or "geometry" not in target:
+        return None
+    pair = (OmegaConf.get_type(tool, "geometry"), OmegaConf.get_type(target, "geometry"))
+    if pair in _PAIR_CHECKS:
+        return None
+    return (
+        f"tool={tool.get('name')} and target={target.get('name')} are not a mating pair: use "
+        "tool=cone_plug target=cone_socket or tool=keyed_plug target=keyed_socket, or a "
+        "fragment file via tool.mjcf / target.mjcf."
+    )
 
 
 # --------------------------------------------------------------------------- memory

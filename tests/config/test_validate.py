@@ -217,7 +217,7 @@ def test_legitimate_appends_and_presets_pass(overrides):
         (("tool.geometry.length=0.02",), "tool.geometry.length must be longer than target.geometry"),
         (("target.contact.solimp=[0.99,0.95,0.001,0.5,2]",), "target.contact.solimp must have dmin <= dmax"),
         (("target=none", "trajectory=hold"), "task.init_pos must be set"),
-        (("tool=keyed_plug",), "target.geometry.plug_radius cannot be resolved"),
+        (("tool=keyed_plug",), "tool=keyed_plug and target=cone_socket are not a mating pair"),
         (
             ("tool=keyed_plug", "target.geometry.plug_radius=0.01"),
             "tool=keyed_plug and target=cone_socket are not a mating pair",

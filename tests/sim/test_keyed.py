@@ -228,10 +228,10 @@ def test_mismatched_parametric_parts_are_refused_naming_the_pairs(tmp_path):
 @pytest.mark.parametrize(
     "override, setting",
     [
-        ("tool.geometry.sides=2", "KeyedPlugGeometry.sides"),
-        ("target.geometry.clearance=0", "KeyedSocketGeometry.clearance"),
-        ("tool.geometry.chamfer_length=0.05", "KeyedPlugGeometry.chamfer_length"),
-        ("tool.geometry.inradius=0.011", "KeyedPlugGeometry.inradius"),
+        ("tool.geometry.sides=2", "tool.geometry.sides must be an integer in [3, 12]; got 2."),
+        ("target.geometry.clearance=0", "target.geometry.clearance must be a finite number > 0 m"),
+        ("tool.geometry.chamfer_length=0.05", "tool.geometry.chamfer_length must be at most"),
+        ("tool.geometry.inradius=0.011", "tool.geometry.inradius must be smaller than the socket's bore"),
     ],
 )
 def test_bad_keyed_parameters_fail_the_run_naming_the_setting(tmp_path, override, setting):
