@@ -101,13 +101,14 @@ class Guard(Callback):
 
         problems: list[str] = []
         jobs = check_jobs(config, problems)
+        composed_for = str(config.hydra.sweep.dir)
         if not problems:
             problem = claim(config, "sweep")
             if problem:
                 problems.append(problem)
         if problems:
             raise refuse("the sweep is refused", problems)
-        if jobs:
+        if jobs and str(config.hydra.sweep.dir) == composed_for:  # else compose again: new directory
             _Composed.attach(config, jobs)
         self.launcher_pid = os.getpid()
         self.watch_parent = not is_submitit(config.hydra.launcher)  # submitit jobs outlive the launcher
@@ -179,13 +180,14 @@ def check_jobs(config: DictConfig, problems: list[str]) -> dict[tuple[str, ...],
 class _Composed:
     """Hands Hydra's sweeper the job configs the guard composed.
 
-    Hydra's basic sweeper composes every job once in the launching process only to check
-    that it composes (``validate_batch_is_legal``; the result is discarded), then the
-    workers compose it again to run it. The guard composed them already, before the sweep
-    directory existed; this replaces the config loader's ``load_sweep_config`` on that one
-    loader instance by a lookup of those configs, each used once, and removes itself when
-    all were used (so nothing of it reaches the workers). An overrides list it does not
-    hold is composed as usual.
+    Hydra's basic sweeper composes every job once in the launching process to check that
+    it composes (``validate_batch_is_legal``), through its config loader's
+    ``load_sweep_config``. The guard composed them already, before the sweep directory
+    existed; this replaces ``load_sweep_config`` on that one loader instance by a lookup of
+    those configs, each used once, and removes itself when all were used. An overrides
+    list it does not hold is composed as usual. The pool launcher (sweep/pool.py) wraps
+    whatever ``load_sweep_config`` it finds to keep the checked configs and send them to
+    the jobs, so with it each job's config is composed once in all, by the guard.
     """
 
     def __init__(self, loader: Any, configs: dict[tuple[str, ...], DictConfig]) -> None:
@@ -203,8 +205,8 @@ class _Composed:
 
     def __call__(self, master_config: DictConfig, sweep_overrides: list[str]) -> DictConfig:
         found = self.configs.pop(tuple(sweep_overrides), None)
-        if not self.configs:
-            vars(self.loader).pop("load_sweep_config", None)
+        if not self.configs and vars(self.loader).get("load_sweep_config") is self:
+            del self.loader.load_sweep_config  # all used: the loader's own method again
         if found is not None:
             return found
         return type(self.loader).load_sweep_config(self.loader, master_config, sweep_overrides)

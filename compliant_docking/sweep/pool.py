@@ -69,7 +69,7 @@ class PoolLauncher(Launcher):
         """Keep what the sweeper's check composes (the loader's ``load_sweep_config``),
         so :meth:`launch` sends those configs instead of having the workers compose again."""
         loader = self.hydra_context.config_loader
-        original = type(loader).load_sweep_config.__get__(loader)
+        original = loader.load_sweep_config  # the guard's lookup of the configs it composed, if any
 
         def load_sweep_config(master_config, sweep_overrides):
             cfg = original(master_config, sweep_overrides)
@@ -157,7 +157,11 @@ def execute_job(idx: int, sweep_config, hydra_context, task_function, singleton_
 
 
 def _import_job_libraries() -> None:
-    """In a new worker: import what every job needs, before the first job arrives."""
+    """In a new worker: import what every job needs, before the first job arrives; and
+    watch the launching process (a worker whose parent died exits: sweep/guard.py)."""
+    from compliant_docking.sweep.guard import start_watchdog
+
+    start_watchdog()
     import hydra.core.utils  # noqa: F401  (Hydra's run_job)
 
     import compliant_docking.control.base  # noqa: F401  (SciPy's LAPACK)
