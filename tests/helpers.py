@@ -82,3 +82,30 @@ def sweep_cli(
         timeout=timeout,
         env=env,
     )
+
+
+#: a short held-contact scene: the plug starts 10 mm above the seat, inside the bore, moves
+#: to the seat in 1 s and the reference is pressed 5 mm deeper (the default press), 4 s in
+#: all: the same held contact as the last 2 s of a full docking run, at a quarter of its cost
+SHORT_CONTACT = (
+    "task.stroke=[0,0,-0.01]",
+    "trajectory.duration=1.0",
+    "task.settle_time=3.0",
+    "task.progress=false",
+)
+
+
+def steady_contact(sim, window: float = 2.0) -> tuple[float, float, float]:
+    """(make/break events per second, |F| mean, |F| std) over the last ``window`` seconds of a
+    finished simulation, as /work/shared/tools/steady_window.py computes them."""
+    log = sim.telemetry
+    n = log.count
+    k = n - int(round(window / sim.scene.model.opt.timestep))
+    touching = (log.contacts[k:n] > 0).astype(int)
+    force = np.linalg.norm(log.wrench[k:n, :3], axis=1)
+    return float(np.abs(np.diff(touching)).sum() / window), float(force.mean()), float(force.std(ddof=1))
+
+
+def calm(rate: float, mean: float, std: float) -> bool:
+    """Issue 10's calm hold: ≤ 5 make/break events per second, std ≤ max(0.5 N, 20 % of the mean)."""
+    return rate <= 5.0 and std <= max(0.5, 0.2 * mean)

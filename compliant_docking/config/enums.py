@@ -30,6 +30,10 @@ class FrictionComp(Enum):
 
     torque = "torque"  # f·tanh(2·τ_pre/f) + b·v: follows the commanded torque, no dead zone at v = 0
     velocity = "velocity"  # f·tanh(v/0.01) + b·v: classic velocity-sign compensation
+    # f·tanh(2·(τ_pre − h)/f) + b·v: the torque mode on the command minus the model's bias
+    # torques h = C v + g, so a gravity-holding torque does not set the sign
+    # (docs/controllers/friction.md)
+    torque_unbiased = "torque_unbiased"
 
 
 class ForceSource(Enum):

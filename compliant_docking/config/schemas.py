@@ -143,6 +143,12 @@ class ControllerConfig:
     name: str = MISSING
     friction_comp: FrictionComp = MISSING
     use_force_feedback: bool = MISSING  # feed the measured wrench to the law (off: pure motion control)
+    # integral action on the position error, a force added to the stiffness force
+    # (docs/controllers/integral.md)
+    integral_gain: float = at_least(0.0, unit="N/(m·s)")  # 0: off
+    integral_limit: float = positive(unit="N")  # clamp of the integral force's norm
+    integral_lateral_only: bool = MISSING  # only the error perpendicular to the docking axis
+    integral_freeze_force: float = at_least(0.0, unit="N")  # frozen while the measured ‖f‖ exceeds this
 
 
 @dataclass
@@ -157,6 +163,8 @@ class ImpedanceConfig(ControllerConfig):
     k_rot: float = at_least(0.0, unit="N·m/rad")
     null_damping: float = at_least(0.0)
     condition_threshold: float = above(1.0)  # cond(J M⁻¹ Jᵀ) above which Λ uses a damped pseudo-inverse
+    # keep the apparent inertia W ⪰ ratio·Λ (docs/controllers/impedance.md); null: the law of §1
+    apparent_inertia_floor: Optional[float] = positive()
 
 
 @dataclass
@@ -207,6 +215,8 @@ class SE3LieConfig(ControllerConfig):
     condition_threshold: float = above(1.0)  # cond(J_b M⁻¹ J_bᵀ) above which Λ uses a damped pseudo-inverse
     desired_wrench: List[float] = finite(size=6)  # F_d in the desired TCP frame [N, N·m]
     formulation: SE3Formulation = MISSING  # twist | lambda_space (same law)
+    # keep the apparent inertia A ⪰ ratio·Λ_b (docs/controllers/se3_lie.md); null: the law of §3
+    apparent_inertia_floor: Optional[float] = positive()
 
 
 # --------------------------------------------------------------------------- trajectories

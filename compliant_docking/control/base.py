@@ -21,6 +21,7 @@ import numpy as np
 from scipy.linalg import lapack
 
 from compliant_docking.config import FrictionComp
+from compliant_docking.control.integral import PositionIntegral
 from compliant_docking.planning.base import Reference
 from compliant_docking.sim.context import ControlContext
 from compliant_docking.sim.models import ArmModel
@@ -29,10 +30,16 @@ _dposv = lapack.dposv
 
 
 class FrictionFeedForward:
-    """Adds back MuJoCo's joint frictionloss f and damping b that Pinocchio does not model.
+    """Adds back MuJoCo's joint frictionloss f and damping b that Pinocchio does not model
+    (docs/controllers/friction.md).
 
     ``torque`` mode: f·tanh(2·τ_pre/f) + b·v (follows the command, so there is no dead zone
     at zero speed); ``velocity`` mode: f·tanh(v/0.01) + b·v. Joints with f = b = 0 get 0.
+    ``torque_unbiased`` mode: f·tanh(2·(τ_pre − h)/f) + b·v with h = C v + g the arm's bias
+    torques of this step (the caller passes ``state.h``): the torque mode on the part of
+    the command that is meant to move the arm. Under gravity the plain torque mode takes
+    its sign from the gravity-holding torque, i.e. it pushes every loaded joint by ±f
+    whatever the motion; in zero gravity the two differ only by C v.
     """
 
     VELOCITY_SCALE = 0.01  # [rad/s]
@@ -42,17 +49,27 @@ class FrictionFeedForward:
         self.f = np.asarray(friction, dtype=float).copy()
         self.b = np.asarray(damping, dtype=float).copy()
         self.active = bool(np.any(self.f > 0.0) or np.any(self.b > 0.0))
-        self._torque_mode = self.mode is FrictionComp.torque
-        # the argument of tanh per unit of its input: 2/f (torque mode) or 1/0.01 (velocity)
+        self._unbiased = self.mode is FrictionComp.torque_unbiased
+        self._torque_mode = self.mode is not FrictionComp.velocity
+        # the argument of tanh per unit of its input: 2/f (torque modes) or 1/0.01 (velocity)
         self._scale = (
             2.0 / np.where(self.f > 0.0, self.f, 1.0)
             if self._torque_mode
             else np.full_like(self.f, 1.0 / self.VELOCITY_SCALE)
         )
 
-    def __call__(self, tau_pre: np.ndarray, v: np.ndarray) -> np.ndarray:
-        """The feed-forward torque (callers may skip the call when ``active`` is False)."""
-        x = (tau_pre if self._torque_mode else v) * self._scale
+    def __call__(self, tau_pre: np.ndarray, v: np.ndarray, bias: np.ndarray | None = None) -> np.ndarray:
+        """The feed-forward torque (callers may skip the call when ``active`` is False).
+
+        ``bias``: the arm's h = C v + g of this step; needed by ``torque_unbiased`` only.
+        """
+        if self._unbiased:
+            if bias is None:
+                raise ValueError("friction_comp=torque_unbiased needs the bias torques h of the step")
+            x = tau_pre - bias
+            x *= self._scale
+        else:
+            x = (tau_pre if self._torque_mode else v) * self._scale
         np.tanh(x, out=x)
         x *= self.f
         x += self.b * v
@@ -120,7 +137,8 @@ class TaskInertia:
 
 
 class Controller(ABC):
-    """Base class: holds the context and the friction feed-forward."""
+    """Base class: holds the context, the friction feed-forward and the optional integral
+    action on the position error (``integral`` is None when ``integral_gain`` is 0)."""
 
     def __init__(
         self,
@@ -128,12 +146,29 @@ class Controller(ABC):
         friction_comp: FrictionComp,
         use_force_feedback: bool,
         name: str,
+        integral_gain: float,
+        integral_limit: float,
+        integral_lateral_only: bool,
+        integral_freeze_force: float,
     ):
         self.ctx = context
         self.arm = context.arm
         self.name = name
         self.use_force_feedback = bool(use_force_feedback)
         self.friction = FrictionFeedForward(context.joint_friction, context.joint_damping, friction_comp)
+        # a force the law adds to its stiffness force (docs/controllers/integral.md)
+        self.integral = (
+            PositionIntegral(
+                integral_gain,
+                integral_limit,
+                context.axis,
+                context.dt,
+                lateral_only=integral_lateral_only,
+                freeze_force=integral_freeze_force,
+            )
+            if integral_gain
+            else None
+        )
 
     @abstractmethod
     def compute(self, t: float, state: ArmModel, ref: Reference, wrench: np.ndarray) -> np.ndarray:
@@ -147,6 +182,10 @@ class Controller(ABC):
     def diagnostics(self) -> dict:
         """Scalars about the run for ``metrics.json`` (solver stats, fallbacks, …)."""
         return {}
+
+    def integral_diagnostics(self) -> dict:
+        """The integral action's, for the subclasses' ``diagnostics`` (empty when off)."""
+        return {} if self.integral is None else self.integral.diagnostics()
 
     def timeseries(self) -> dict[str, np.ndarray]:
         """Per-step signals for the run's time series, one row per step (name → array

@@ -9,6 +9,11 @@ and τ = Jᵀ(Λ(a − J̇v) − w_ext) + h − Nᵀ(b·v) + friction feed-forwa
 Nᵀ(b v) = b v − JᵀΛJM⁻¹(b v). Exact force feedback cancels the contact wrench in the
 arm's dynamics, so the closed loop is W ë + D ė + K e = w_ext: a constant push F
 settles at a displacement F/k. Without force feedback the w_ext terms vanish.
+
+Options (docs/controllers/impedance.md, integral.md): ``apparent_inertia_floor`` replaces
+W by W_eff ⪰ ratio·Λ (a deviation from §1 that keeps the one-step-old force feedback
+stable; null: the law of §1), and the integral action adds a force F_i to K e:
+a = ν̇_d + W_eff⁻¹(w_ext + K e + F_i + D (ν_d − ν)).
 """
 
 from __future__ import annotations
@@ -17,6 +22,7 @@ import numpy as np
 import pinocchio as pin
 
 from compliant_docking.control.base import Controller, TaskInertia
+from compliant_docking.control.shaping import inertia_floor
 from compliant_docking.planning.base import Reference
 from compliant_docking.sim.context import ControlContext
 from compliant_docking.sim.models import ArmModel
@@ -35,6 +41,7 @@ class ImpedanceController(Controller):
         k_rot: float,
         null_damping: float,
         condition_threshold: float,
+        apparent_inertia_floor: float | None,
         **common,
     ):
         super().__init__(context, **common)
@@ -61,11 +68,15 @@ class ImpedanceController(Controller):
                 np.diag(W_inv) if self.use_force_feedback else np.zeros((6, 6)),
             ]
         )
+        self._w_inv_m = 1.0 / float(m)
         self._z = np.zeros(18)
         self._z_pos, self._z_rot = self._z[0:3], self._z[3:6]
         self._z_twist, self._z_wrench = self._z[6:12], self._z[12:18]
         self.null_damping = float(null_damping)
         self.task_inertia = TaskInertia(condition_threshold)
+        # the deviation from §1 that keeps the delayed force feedback stable (None: off, or
+        # no force feedback: no such loop, the law stays §1's)
+        self.inertia_floor = inertia_floor(1.0 / W_inv, apparent_inertia_floor, self.use_force_feedback)
 
     def compute(self, t: float, state: ArmModel, ref: Reference, wrench: np.ndarray) -> np.ndarray:
         arm = state
@@ -74,12 +85,22 @@ class ImpedanceController(Controller):
         self._z_rot[:] = pin.log3(ref.rot.dot(arm.rot_T))
         np.subtract(ref.twist, arm.twist, out=self._z_twist)
         self._z_wrench[:] = wrench
-        a = self.G.dot(self._z)
+        a = self.G.dot(self._z)  # W⁻¹(K e + D ė + w)
+        if self.integral is not None:  # + W⁻¹F_i
+            i0, i1, i2 = self.integral.update(self._z_pos, wrench)
+            w_inv = self._w_inv_m
+            a[0] += w_inv * i0
+            a[1] += w_inv * i1
+            a[2] += w_inv * i2
+        J, v = arm.J, arm.v
+        JMinv = J.dot(arm.Minv)
+        if self.inertia_floor is not None:
+            P = self.inertia_floor.current(J, JMinv)
+            if P is not None:  # W⁻¹(…) → W_eff⁻¹(…); inactive: a untouched, bit for bit
+                a = P.dot(a)
         a += ref.accel
         a -= arm.Jdot_v
 
-        J, v = arm.J, arm.v
-        JMinv = J.dot(arm.Minv)
         bv = self.null_damping * v
         a += JMinv.dot(bv)
         force = self.task_inertia.solve(J, JMinv, a)
@@ -89,8 +110,12 @@ class ImpedanceController(Controller):
         tau += arm.h
         tau -= bv
         if self.friction.active:
-            tau += self.friction(tau, v)
+            tau += self.friction(tau, v, arm.h)
         return tau
 
     def diagnostics(self) -> dict:
-        return self.task_inertia.diagnostics()
+        out = self.task_inertia.diagnostics()
+        out.update(self.integral_diagnostics())
+        if self.inertia_floor is not None:
+            out.update(self.inertia_floor.diagnostics())
+        return out

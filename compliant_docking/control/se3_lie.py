@@ -104,6 +104,7 @@ from compliant_docking.control.lie import (
     log3_list,
     trig_terms,
 )
+from compliant_docking.control.shaping import inertia_floor
 from compliant_docking.planning.base import Reference
 from compliant_docking.sim.context import ControlContext
 from compliant_docking.sim.models import ArmModel
@@ -150,6 +151,7 @@ class SE3LieController(Controller):
                  null_damping: float, condition_threshold: float,
                  desired_wrench,
                  formulation: Formulation | str,
+                 apparent_inertia_floor: float | None,
                  A=None, D=None, K=None, **common):
         super().__init__(context, **common)
         self.A = _matrix(A_diag if A is None else A, "A_diag" if A is None else "A")
@@ -182,19 +184,29 @@ class SE3LieController(Controller):
         self._K_diag = np.diag(self.K).tolist() if diagonal[2] else None
         self._G_diag = (np.diag(self.G[:, :6]).tolist() + np.diag(self.G[:, 6:]).tolist()
                         if diagonal[0] and diagonal[1] else None)
+        # the deviation from §3 that keeps the delayed force feedback stable (None: off, or
+        # no force feedback: no such loop; docs/controllers/se3_lie.md): A_eff ⪰ ratio·Λ_b,
+        # applied to A⁻¹(…) in V̇_ref
+        if apparent_inertia_floor is not None and self.use_force_feedback and not diagonal[0]:
+            raise ValueError("controller.apparent_inertia_floor needs a diagonal A (or null: off)")
+        self.inertia_floor = inertia_floor(np.diag(self.A), apparent_inertia_floor,
+                                           self.use_force_feedback)
 
         nv = self.arm.nv
         # World vectors, one per row, turned into TCP-frame vectors by ONE product per step
         # (row x ↦ xR = (Rᵀx)ᵀ): rows 0-2 the columns of R_d | 3 p_d − p | 4-5 ṗ, ω |
-        # 6-7 J̇v = [a; α] | 8-9 ṗ_d, ω_d | 10-11 p̈_d, α_d | 12-13 f, m.
-        self._world = np.zeros((14, 3))
-        self._body = np.zeros((14, 3))
-        flat = self._world.reshape(42)
+        # 6-7 J̇v = [a; α] | 8-9 ṗ_d, ω_d | 10-11 p̈_d, α_d | 12-13 f, m
+        # | 14 the integral force F_i (only with integral action).
+        rows = 15 if self.integral is not None else 14
+        self._world = np.zeros((rows, 3))
+        self._body = np.zeros((rows, 3))
+        self._w_integral = self._world[14] if self.integral is not None else np.zeros(3)
+        flat = self._world.reshape(3 * rows)
         self._w_err = self._world[3]
         self._w_twist, self._w_jdv = flat[12:18], flat[18:24]
         self._w_ref_twist, self._w_ref_accel = flat[24:30], flat[30:36]
         self._w_wrench = flat[36:42]
-        self._F_body = self._body.reshape(42)[36:42]  # view: F_body after the product
+        self._F_body = self._body.reshape(3 * rows)[36:42]  # view: F_body after the product
         self._buffers = (self._world, self._w_err, self._w_twist, self._w_jdv,
                          self._w_ref_twist, self._w_ref_accel, self._w_wrench, self._body)
         self._z = np.zeros(12)  # [dexp⁻ᵀ(γ − Kλ); −dexp·λ̇] for G (lambda_space)
@@ -230,11 +242,16 @@ class SE3LieController(Controller):
         w_ref_accel[:] = ref.accel
         if self.use_force_feedback:
             w_wrench[:] = wrench
+        integral = self.integral
+        if integral is not None:  # F_i (world) rides along to TCP axes
+            self._w_integral[:] = integral.update(w_err, wrench)
         W.dot(arm.rot, out=body)
+        rows = body.tolist()
+        F_i = rows.pop() if integral is not None else None
         ((c00, c01, c02), (c10, c11, c12), (c20, c21, c22), (e0, e1, e2),
          (pv0, pv1, pv2), (pw0, pw1, pw2), (ja0, ja1, ja2), (jb0, jb1, jb2),
          (dv0, dv1, dv2), (dw0, dw1, dw2), (da0, da1, da2), (db0, db1, db2),
-         (f0, f1, f2), (m0, m1, m2)) = body.tolist()
+         (f0, f1, f2), (m0, m1, m2)) = rows
         # R̃ = RᵀR_d has columns (c00, c01, c02), (c10, …), (c20, …); p̃ = Rᵀ(p_d − p) = e
 
         # --- λ = log6(T̃) = [J(w)⁻¹p̃; w], w = log3(R̃); refused at ‖w‖ ≥ π
@@ -301,6 +318,9 @@ class SE3LieController(Controller):
                        e0 * r1 - e1 * r0 + c02 * n0 + c12 * n1 + c22 * n2 - m2)
         else:
             F_tilde = (-f0, -f1, -f2, -m0, -m1, -m2)
+        if F_i is not None:  # a gains A⁻¹[RᵀF_i; 0]: F̃ − F_i enters A⁻¹(F̃ − D·Ṽ − dexp⁻ᵀKλ)
+            i0, i1, i2 = F_i
+            F_tilde = (F_tilde[0] - i0, F_tilde[1] - i1, F_tilde[2] - i2, *F_tilde[3:])
         V_tilde = (t0, t1, t2, t3, t4, t5)
 
         if self._twist:
@@ -351,7 +371,13 @@ class SE3LieController(Controller):
         J, Jb, Rt = arm.J, self._Jb, arm.rot_T
         Rt.dot(J[:3], out=self._Jb_lin)
         Rt.dot(J[3:], out=self._Jb_ang)
-        force = self.task_inertia.solve(Jb, Jb.dot(arm.Minv), a)  # Λ(V̇_ref − J̇_b v + bV)
+        JbMinv = Jb.dot(arm.Minv)
+        if self.inertia_floor is not None:  # A⁻¹(…) → A_eff⁻¹(…): a = base + A_eff⁻¹A(a − base)
+            P = self.inertia_floor.current(Jb, JbMinv)
+            if P is not None:  # (inactive: a untouched, bit for bit)
+                base_v = _fromiter(base, _F64, 6)
+                a = base_v + P.dot(a - base_v)
+        force = self.task_inertia.solve(Jb, JbMinv, a)  # Λ(V̇_ref − J̇_b v + bV)
         if self.use_force_feedback:
             force -= self._F_body
         v = arm.v
@@ -359,7 +385,7 @@ class SE3LieController(Controller):
         tau += arm.h
         tau -= bn * arm.M.dot(v)
         if self.friction.active:
-            tau += self.friction(tau, v)
+            tau += self.friction(tau, v, arm.h)
 
         # --- bookkeeping (no copies beyond one row of the λ record)
         k = self._k
@@ -412,8 +438,12 @@ class SE3LieController(Controller):
         return K_V, K_F.dot(self.K), K_F
 
     def diagnostics(self) -> dict:
-        return {**self.task_inertia.diagnostics(),
-                "se3_max_rotation_error_rad": float(self.max_rotation_error)}
+        out = {**self.task_inertia.diagnostics(),
+               "se3_max_rotation_error_rad": float(self.max_rotation_error),
+               **self.integral_diagnostics()}
+        if self.inertia_floor is not None:
+            out.update(self.inertia_floor.diagnostics())
+        return out
 
     def timeseries(self) -> dict[str, np.ndarray]:
         return {"se3_lambda": self._lam_log[:min(self._k, len(self._lam_log))]}

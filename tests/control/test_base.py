@@ -52,3 +52,21 @@ def test_friction_feedforward_modes():
     velocity = FrictionFeedForward(f, b, FrictionComp.velocity)(tau, v)
     assert np.allclose(velocity, f * np.tanh(v / 0.01) + b * v)
     assert not FrictionFeedForward(np.zeros(3), np.zeros(3), FrictionComp.torque).active
+
+
+def test_friction_feedforward_unbiased_mode_ignores_the_bias_torques():
+    """``torque_unbiased``: the torque mode on τ_pre − h, h the step's bias torques. A
+    gravity-holding command (τ_pre = h) gets no friction push; the motion part does."""
+    f = np.array([1.0, 0.0, 0.5])
+    b = np.array([0.2, 0.0, 0.1])
+    v = np.array([0.3, 1.0, -0.02])
+    h = np.array([-30.0, 5.0, 17.0])  # e.g. gravity on loaded joints
+    ff = FrictionFeedForward(f, b, FrictionComp.torque_unbiased)
+    assert np.allclose(ff(h.copy(), v, h), b * v)  # holding torque only: damping term only
+    tau = h + np.array([0.3, -1.0, -0.2])
+    expected = f * np.tanh(2 * (tau - h) / np.where(f > 0, f, 1)) + b * v
+    assert np.allclose(ff(tau, v, h), expected)
+    # with h = 0 (zero gravity, at rest) it is the torque mode
+    assert np.allclose(ff(tau, v, np.zeros(3)), FrictionFeedForward(f, b, FrictionComp.torque)(tau, v))
+    with pytest.raises(ValueError, match="torque_unbiased"):
+        ff(tau, v)

@@ -12,7 +12,8 @@ on the tool at the TCP (world axes; the sensor's or the momentum observer's):
 * damping (Eq. 29) D_r = Λ^½ K_r^½ + K_r^½ Λ^½ (see :func:`damping_matrix` for the case
   where this symmetric matrix is not positive definite);
 * reference wrench F_r = −D_r Δν − K_r e + F_pre, e = [x − x_d; log3(R R_dᵀ)],
-  Δν = ν − ν_d, F_pre = p(t)·[axis; 0] the optional preload (:class:`PreloadRamp`);
+  Δν = ν − ν_d, F_pre = p(t)·[axis; 0] the optional preload (:class:`PreloadRamp`), plus
+  [F_i; 0] with the optional integral action (docs/controllers/integral.md);
 * level 1 (Eq. 33-36): min ‖J q̈ + J̇v − (ν̇_d + Λ⁻¹F_r)‖² + 1e-8‖q̈‖² subject to the
   zero-order-hold predictions over dt_p
       |v + dt_p q̈| ≤ v_max,  q_min ≤ q + dt_p v + ½dt_p² q̈ ≤ q_max,  |M q̈ + ĥ| ≤ τ_max,
@@ -249,6 +250,9 @@ class HQPController(Controller):
         np.subtract(ref.pos, arm.pos, out=self._z_pos)
         self._z_rot[:] = pin.log3(ref.rot.dot(arm.rot_T))
         F_r = z.dot(self._DK)
+        if self.integral is not None:  # + [F_i; 0] (integral action, docs/controllers/integral.md)
+            i0, i1, i2 = self.integral.update(self._z_pos, w_ext)
+            F_r[0], F_r[1], F_r[2] = F_r[0] + i0, F_r[1] + i1, F_r[2] + i2
         if preload:
             F_r[:3] += preload * self.axis
         b = lam_inv.dot(F_r)
@@ -283,7 +287,7 @@ class HQPController(Controller):
         hhat[:] = arm.h
         Z = self._Y.dot(self._T)  # torque rows: τ_pre = M q̈ + h
         if self.friction.active:  # ĥ = h + feed-forward of the final candidate's τ_pre
-            ff = self.friction(Z[1, 2 * n :], v)
+            ff = self.friction(Z[1, 2 * n :], v, arm.h)
             Z[:, 2 * n :] += ff
             hhat += ff
         within = np.abs(Z) <= self._half
@@ -424,6 +428,7 @@ class HQPController(Controller):
             "hqp_level2_zero_steps": self.level2_zero_steps,
             "hqp_singularity_steps": self.singularity_steps,
             "hqp_force_source": self.force_source.value,
+            **self.integral_diagnostics(),
         }
         out.update(self.level1.diagnostics(self._fast_steps))
         out.update(self.level2.diagnostics(self._fast_steps))
