@@ -254,9 +254,10 @@ def test_docks_the_default_scene_fr3(tmp_path):
 
 
 def test_fr3_with_the_default_stiffness_stalls_short_of_the_seat(tmp_path):
-    """Why the FR3 gain file exists: at K0 = 300 the joint friction stalls the arm
-    millimetres above the seat."""
-    rec = _dock(tmp_path, "robot=fr3", "controller.K0=[300,300,300,50,50,50]")
+    """Why the FR3 gain file raises K0: at K0 = 300, without integral action, the joint
+    friction stalls the arm millimetres above the seat. (With the gain file's integral
+    action, 2000 N/(m·s), K0 = 300 docks as well.)"""
+    rec = _dock(tmp_path, "robot=fr3", "controller.K0=[300,300,300,50,50,50]", "controller.integral_gain=0")
     assert not rec["success"] and rec["seat_depth_error_m"] > 1e-3
 
 
@@ -273,14 +274,19 @@ def _run_without_joint_friction(out_dir, *overrides):
 
 def test_fr3_docks_without_joint_friction(tmp_path):
     """The FR3 scene with its joint frictionloss removed (model and feed-forward): hqp docks,
-    with a peak axial force under half the impedance controller's (k=300, d=100)."""
+    and so does the impedance controller with the FR3's gains; without friction both reach
+    the seat gently (peak < 5 N against 24-40 N with friction). (This test used to find
+    hqp's peak under half the impedance controller's: that peak, 18 N, was the 250 Hz
+    bounce of the law of §1 at m = 2 kg, which the apparent-inertia floor removes; with it
+    the impedance peak is 1.8 N, hqp's 1.8 N.)"""
     sim, hqp_rec = _run_without_joint_friction(tmp_path / "hqp", "controller=hqp")
     assert hqp_rec["success"], hqp_rec["gate_failures"]
     assert sim.controller.level1.failures == 0 and sim.controller.level2.failures == 0
     _, imp_rec = _run_without_joint_friction(
         tmp_path / "impedance", "controller=impedance", "controller.k=300", "controller.d=100"
     )
-    assert hqp_rec["peak_axial_force_N"] < 0.5 * imp_rec["peak_axial_force_N"]
+    assert imp_rec["success"], imp_rec["gate_failures"]
+    assert hqp_rec["peak_axial_force_N"] < 5.0 and imp_rec["peak_axial_force_N"] < 5.0
 
 
 def test_preload_settles_at_preload_plus_the_spring(tmp_path):
@@ -369,3 +375,38 @@ def test_metrics_and_timeseries_carry_the_controller_signals(tmp_path):
     assert rec["lambda_fallback_steps"] == 0 and rec["hqp_modal_damping_steps"] == 0
     # cond(J M⁻¹ Jᵀ) of the iiwa14 here: 1e4 (the light last joint), far below the 1e8 floor
     assert 1e3 < rec["lambda_max_condition"] < 1e5
+
+
+@pytest.mark.parametrize("robot", ["fr3", "iiwa14"])
+def test_hqp_holds_still_near_a_singularity(robot):
+    """Holding the TCP still for 10 s at the seat's position (free space), where the FR3's
+    manipulability (0.065) is below omega_th (0.08) and singularity avoidance acts every
+    step: with the default (inertia) null-space metric no joint moves. The paper's
+    euclidean direction leaks into the dynamically consistent null space and turns the
+    FR3's q1 and q3 by 0.014 rad (measured), which this bound — 1e-3 rad, a fourteenth of
+    that — catches; the iiwa14 stays above omega_th and must not move either."""
+
+    def drift(*overrides):
+        sim = prepare(
+            make_cfg(
+                f"robot={robot}",
+                "controller=hqp",
+                "target=none",
+                "trajectory=hold",
+                "trajectory.duration=10",
+                "task.settle_time=0",
+                "task.init_pos=[0.55,0.0,0.21]",
+                "task.progress=false",
+                *overrides,
+            )
+        )
+        sim.run()
+        q = sim.telemetry.q[: sim.telemetry.count]
+        return np.abs(q - q[0]).max(), sim.controller.diagnostics()["hqp_singularity_steps"]
+
+    moved, active = drift()
+    assert moved < 1e-3
+    if robot == "fr3":
+        assert active == 10_000  # the avoidance term was on all along
+        moved, _ = drift("controller.null_space_metric=euclidean")
+        assert moved > 5e-3  # the bound can fail: the paper's direction drifts

@@ -54,11 +54,13 @@ def random_spd(rng, scale):
 
 def controller(sim, **kwargs):
     """A controller on sim's arm with the gains of conf/controller/se3_lie.yaml, some
-    overridden (friction feed-forward irrelevant: iiwa14 has none)."""
+    overridden (friction feed-forward irrelevant: iiwa14 has none), under the law of §3
+    (no apparent-inertia floor: these tests compare against the spec)."""
     assert not sim.controller.friction.active
     params = OmegaConf.to_container(sim.cfg.controller, resolve=True)
     params.pop("_target_")
     params["friction_comp"] = FrictionComp.torque
+    params["apparent_inertia_floor"] = None
     return SE3LieController(sim.controller.ctx, **{**params, **kwargs})
 
 
