@@ -299,6 +299,12 @@ class DockingGateConfig:
     # keyed interfaces: the plug's roll within this of the socket's key; null: the key's
     # yaw play + 0.1 deg (a seated plug cannot turn further), unchecked if it declares none
     key_yaw_tolerance_deg: Optional[float] = positive(at_most=180.0, unit="deg")
+    # a calm hold over the steady window (evaluation/contact.py; docs/run_directory.md)
+    max_contact_events_per_s: float = at_least(0.0, unit="1/s")  # contact make/break events per second
+    max_force_std_N: float = at_least(
+        0.0, unit="N"
+    )  # std of |f| allowed: max(max_force_std_N, ratio × mean |f|)
+    max_force_std_ratio: float = at_least(0.0)
 
 
 @dataclass
@@ -359,6 +365,9 @@ class TaskConfig:
     duration: Optional[float] = positive(unit="s")  # run length [s]; null: planner duration + settle_time
     settle_time: float = at_least(0.0, unit="s")  # run time after the trajectory ends [s]
     steady_window: float = positive(unit="s")  # window at the end for the steady-state metrics [s]
+    strike_window: float = positive(
+        unit="s"
+    )  # cap of the first strike after first contact (evaluation/contact.py)
     gate: DockingGateConfig = MISSING
     tracking_gate: TrackingThresholds = MISSING  # trajectory=tracking
     misalignment: MisalignmentConfig = MISSING  # true vs believed socket pose

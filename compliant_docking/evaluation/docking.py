@@ -14,12 +14,14 @@ Conventions (docs/metrics.md):
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
 import pinocchio as pin
 
+from compliant_docking.evaluation.contact import ContactMetrics
 from compliant_docking.evaluation.registry import DOCKING_KEYS, finite_or_none
 from compliant_docking.sim.geometry.fragment import ROUND, Key
 from compliant_docking.sim.telemetry import (
@@ -205,24 +207,86 @@ def _quat_z_axis(quat_wxyz: np.ndarray) -> np.ndarray:
 
 
 def docking_gate(
-    seat: SeatState, metrics: DockingMetrics, gate, key_yaw_limit_deg: float | None = None
+    seat: SeatState,
+    metrics: DockingMetrics,
+    gate,
+    key_yaw_limit_deg: float | None = None,
+    contact: ContactMetrics | None = None,
 ) -> list[str]:
-    """Failing items of the docking gate (empty: success). Missing or non-finite values fail.
+    """Failing items of the docking gate (empty: success), each saying what failed.
 
     ``key_yaw_limit_deg`` (:func:`key_yaw_limit`): also check the roll against the key.
+
+    Missing or non-finite values fail. With ``contact`` (the runner always passes it) the
+    steady hold must also be calm: at most ``gate.max_contact_events_per_s`` contact
+    make/break events per second and a force standard deviation of at most
+    max(``gate.max_force_std_N``, ``gate.max_force_std_ratio`` × mean |F|), so a plug
+    bouncing on its seat is never reported as docked.
     """
-    checks = [
-        ("seat depth error", seat.depth_error_m, gate.depth_tolerance_m, "m"),
-        ("seat lateral error", seat.lateral_error_m, gate.lateral_tolerance_m, "m"),
-        ("plug tilt", seat.tilt_deg, gate.tilt_tolerance_deg, "deg"),
-        ("peak axial force", metrics["peak_axial_force_N"], gate.peak_force_budget_N, "N"),
+    window = "over the steady window"
+    checks: list[tuple[str, float | None, float, Callable[[float, float], str]]] = [
+        (
+            "seat depth error",
+            seat.depth_error_m,
+            gate.depth_tolerance_m,
+            lambda v, lim: (
+                f"not seated: tip up to {v * 1e3:.3g} mm from the seat {window} (tolerance {lim * 1e3:g} mm)"
+            ),
+        ),
+        (
+            "seat lateral error",
+            seat.lateral_error_m,
+            gate.lateral_tolerance_m,
+            lambda v, lim: (
+                f"off the axis: tip up to {v * 1e3:.3g} mm from the socket axis {window} "
+                f"(tolerance {lim * 1e3:g} mm)"
+            ),
+        ),
+        (
+            "plug tilt",
+            seat.tilt_deg,
+            gate.tilt_tolerance_deg,
+            lambda v, lim: f"tilted: plug up to {v:.3g}° off the socket axis (tolerance {lim:g}°)",
+        ),
+        (
+            "peak axial force",
+            metrics["peak_axial_force_N"],
+            gate.peak_force_budget_N,
+            lambda v, lim: f"peak force {v:.3g} N over the {lim:g} N budget",
+        ),
     ]
+    if contact is not None:
+        checks.append(
+            (
+                "steady contact events",
+                contact["steady_contact_events_per_s"],
+                gate.max_contact_events_per_s,
+                lambda v, lim: f"contact chatter: {v:.3g} make/break events/s {window} (limit {lim:g}/s)",
+            )
+        )
+        mean = contact["steady_force_mean_N"]
+        spread = (
+            max(float(gate.max_force_std_N), float(gate.max_force_std_ratio) * mean)
+            if mean is not None
+            else 0.0
+        )
+        checks.append(
+            (
+                "steady force spread",
+                contact["steady_force_std_N"] if mean is not None else None,
+                spread,
+                lambda v, lim: (
+                    f"unsteady hold: |F| {mean:.3g} ± {v:.3g} N {window} (std limit {lim:.3g} N "
+                    f"= max({gate.max_force_std_N:g} N, {gate.max_force_std_ratio:.0%} of the mean))"
+                ),
+            )
+        )
     failures = []
-    for label, value, limit, unit in checks:
+    for label, value, limit, message in checks:
         if value is None or not np.isfinite(value):  # fail closed
             failures.append(f"{label} not available (non-finite or no data)")
         elif value > limit:
-            failures.append(f"{label} {value:.4g} {unit} > {limit:g} {unit}")
+            failures.append(message(value, limit))
     if key_yaw_limit_deg is not None:
         if seat.key_yaw_deg is None or not np.isfinite(seat.key_yaw_deg):  # fail closed
             failures.append("key yaw not available (non-finite or no data)")
@@ -232,3 +296,17 @@ def docking_gate(
                 "is not lined up with the socket's, so it cannot enter the bore"
             )
     return failures
+
+
+def docking_verdict(seat: SeatState, gate, failures: list[str]) -> str:
+    """One line for the console: "docked", or what failed, led by whether the plug is seated
+    (e.g. "seated; peak force 63.6 N over the 50 N budget")."""
+    if not failures:
+        return "docked"
+    seated = (
+        seat.depth_error_m is not None
+        and seat.depth_error_m <= gate.depth_tolerance_m
+        and seat.lateral_error_m is not None
+        and seat.lateral_error_m <= gate.lateral_tolerance_m
+    )
+    return ("seated; " if seated else "not docked: ") + "; ".join(failures)

@@ -16,14 +16,15 @@ from dataclasses import dataclass
 import numpy as np
 
 #: sections, in the order they are shown
-CONTACT, INTERNAL, TRACKING, SEAT, RUN = (
+CONTACT, CONTACT_EVENTS, INTERNAL, TRACKING, SEAT, RUN = (
     "contact safety",
+    "contact",
     "internal safety",
     "tracking accuracy",
     "seat (true socket pose)",
     "run",
 )
-SECTIONS = (CONTACT, INTERNAL, TRACKING, SEAT, RUN)
+SECTIONS = (CONTACT, CONTACT_EVENTS, INTERNAL, TRACKING, SEAT, RUN)
 DEG_PER_RAD = 180.0 / math.pi
 
 
@@ -73,6 +74,15 @@ METRICS: tuple[Metric, ...] = (
     Metric("peak_wrench_norm_N", CONTACT, "peak wrench norm", "N"),
     Metric("steady_axial_force_N", CONTACT, "steady axial force", "N"),
     Metric("steady_wrench_norm_N", CONTACT, "steady wrench norm", "N"),
+    # what the contact did (docking runs; evaluation/contact.py): first contact, the first
+    # strike, and how calm the hold is over the steady window
+    Metric("first_contact_time_s", CONTACT_EVENTS, "first contact at", "s"),
+    Metric("first_strike_force_N", CONTACT_EVENTS, "first strike peak", "N", spec=".2f"),
+    Metric("first_contact_lateral_offset_m", CONTACT_EVENTS, "offset at first contact", "mm", 1e3),
+    Metric("first_contact_speed_m_s", CONTACT_EVENTS, "speed at first contact", "mm/s", 1e3, spec=".2f"),
+    Metric("steady_force_mean_N", CONTACT_EVENTS, "steady |F| mean", "N"),
+    Metric("steady_force_std_N", CONTACT_EVENTS, "steady |F| std", "N"),
+    Metric("steady_contact_events_per_s", CONTACT_EVENTS, "steady make/break", "events/s", spec=".1f"),
     # internal safety (Table 10)
     Metric(
         "max_joint_pos_pct",
@@ -110,6 +120,8 @@ DOCKING_KEYS: tuple[str, ...] = TABLE10_KEYS + tuple(
     m.joint_key for m in METRICS if m.section in (CONTACT, INTERNAL, TRACKING) and m.joint_key
 )
 SEAT_KEYS: tuple[str, ...] = tuple(m.key for m in METRICS if m.section == SEAT)
+#: the contact metrics (evaluation/contact.py), docking runs only
+CONTACT_KEYS: tuple[str, ...] = tuple(m.key for m in METRICS if m.section == CONTACT_EVENTS)
 
 
 def in_section(section: str, *, compared_only: bool = False) -> list[Metric]:

@@ -34,7 +34,7 @@ from compliant_docking.sim.telemetry import FORCE, axial_force
 from compliant_docking.viz.plotting import FORMATS, apply_style, check_formats, envelope
 
 #: metrics drawn by :func:`metric_bars`, by section of the registry (plus success)
-BAR_SECTIONS = (registry.CONTACT, registry.INTERNAL, registry.TRACKING)
+BAR_SECTIONS = (registry.CONTACT, registry.CONTACT_EVENTS, registry.INTERNAL, registry.TRACKING)
 #: misalignment components: (metrics.json key, axis label, scale to the shown unit)
 MISALIGNMENT_AXES = (
     ("misalignment_lateral_m", "lateral error [mm]", 1e3),
@@ -84,7 +84,8 @@ def metric_bars(df: pd.DataFrame, out_dir: str | Path | None = None, stem: str =
     rows: list[list[registry.Metric | None]] = [
         list(registry.in_section(s, compared_only=True)) for s in BAR_SECTIONS
     ]
-    rows[1] = rows[1] + [None]  # the success rate after the internal-safety metrics
+    internal = BAR_SECTIONS.index(registry.INTERNAL)
+    rows[internal] = rows[internal] + [None]  # the success rate after the internal-safety metrics
     ncols = max(len(r) for r in rows)
     legend_rows = math.ceil(len(hues) / 4) if any(hues) else 0
     height = 1.75 * len(rows) + 0.6 + 0.15 * legend_rows

@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 from omegaconf import DictConfig, OmegaConf
 
-from compliant_docking.evaluation.registry import DOCKING_KEYS
+from compliant_docking.evaluation.registry import CONTACT_KEYS, DOCKING_KEYS
 from compliant_docking.run import figures as run_figures
 from compliant_docking.run import provenance, rundir
 from compliant_docking.run.summary import display_path, format_summary
@@ -67,6 +67,7 @@ def execute(cfg: DictConfig, out_dir: Path, *, figures: bool | None = None, echo
     out_dir.mkdir(parents=True, exist_ok=True)
     record: dict = {"status": "failed", "error": None, "success": False, **job_identity(cfg)}
     record.update(dict.fromkeys(DOCKING_KEYS))
+    record.update(dict.fromkeys(CONTACT_KEYS), gate_verdict=None)
     record.update(misalignment_record(cfg))  # true vs believed socket pose (flat keys)
     sim = None
     interrupted: KeyboardInterrupt | None = None
@@ -171,6 +172,7 @@ def evaluate(sim, out_dir: Path, *, figures: bool) -> dict:
     """Metrics, gate, time series and figures of a finished simulation (the record's
     fields they fill); writes the time series and the figures into ``out_dir``."""
     from compliant_docking.evaluation import docking as M
+    from compliant_docking.evaluation.contact import contact_metrics
 
     cfg, arm = sim.cfg, sim.scene.arm
     extras = sim.controller.timeseries()
@@ -197,6 +199,7 @@ def evaluate(sim, out_dir: Path, *, figures: bool) -> dict:
     failures: list[str] = []
     gated = True
     complete = sim.complete
+    seat = None
     if sim.scene.socket is not None:
         key = sim.scene.key
         seat = M.seat_state(
@@ -215,7 +218,16 @@ def evaluate(sim, out_dir: Path, *, figures: bool) -> dict:
             key_symmetry=key.symmetry,
             key_yaw_play_deg=key.yaw_play_deg,
         )
-        failures = M.docking_gate(seat, docking, cfg.task.gate, M.key_yaw_limit(cfg.task.gate, key))
+        contact = contact_metrics(
+            ts,
+            sim.scene.socket.true,
+            steady_window=float(cfg.task.steady_window),
+            strike_window=float(cfg.task.strike_window),
+        )
+        result.update(contact)
+        failures = M.docking_gate(
+            seat, docking, cfg.task.gate, M.key_yaw_limit(cfg.task.gate, key), contact=contact
+        )
     elif isinstance(sim.planner, TrackingPlanner):
         from compliant_docking.evaluation.tracking_gate import tracking_gate
 
@@ -226,6 +238,8 @@ def evaluate(sim, out_dir: Path, *, figures: bool) -> dict:
         gated = False
     if not complete:
         failures = sim.notes + failures
+    if seat is not None:  # docking runs, one line: "docked", "seated; …" or "not docked: …"
+        result["gate_verdict"] = M.docking_verdict(seat, cfg.task.gate, failures)
     result["status"] = "ok" if complete else "incomplete"
     result["success"] = (complete and not failures) if gated else None
     result["gate_failures"] = "; ".join(failures) or None

@@ -1,5 +1,6 @@
 """The console summary of one run (also saved as ``summary.txt``): the registry's metrics by
-section, then the status, the gate's verdict and what failed."""
+section (the contact section for docking runs), then the status, the gate's verdict and
+what failed."""
 
 from __future__ import annotations
 
@@ -31,6 +32,8 @@ def format_summary(record: dict, cfg: DictConfig | None = None) -> str:
     if r("status") != "failed":  # a failed run measured nothing: its reason, not a table of n/a
         for name in ALWAYS:
             rows += section(name)
+            if name == registry.CONTACT and any(r(key) is not None for key in registry.CONTACT_KEYS):
+                rows += section(registry.CONTACT_EVENTS)  # docking runs: what the contact did
         if r("seat_depth_error_m") is not None or (r("gate_failures") and r("tracking_gate") is None):
             rows += section(registry.SEAT, "seat, true socket pose")
         if r("tracking_gate") is not None:  # the free-space tracking gate
@@ -42,6 +45,8 @@ def format_summary(record: dict, cfg: DictConfig | None = None) -> str:
         lines.append(label if value is None else f"  {label:<{width}} : {value}")
     status = r("status")
     verdict = "success" if r("success") else ("FAILED" if status == "failed" else "not docked")
+    if status == "ok" and r("gate_verdict") and not r("success"):
+        verdict = str(r("gate_verdict"))  # says what failed, e.g. "seated; peak force … over the budget"
     if status == "interrupted":
         verdict = "INTERRUPTED: the metrics cover the part that ran"
     elif status != "failed" and r("tracking_gate") is not None:
@@ -54,7 +59,7 @@ def format_summary(record: dict, cfg: DictConfig | None = None) -> str:
     lines.append(f"  status {status} · success {success} ({verdict})")
     if r("error"):
         lines.append(f"  error: {r('error')}")
-    if r("gate_failures"):
+    if r("gate_failures") and verdict != r("gate_verdict"):  # the verdict already lists them
         lines.append(f"  gate: {r('gate_failures')}")
     if r("mujoco_warnings"):
         lines.append(f"  MuJoCo warnings: {r('mujoco_warnings')} (mujoco.log in the run directory)")

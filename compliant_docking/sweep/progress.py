@@ -76,7 +76,8 @@ def next_count(sweep_dir: Path) -> int | None:
 
 
 def job_line(out_dir: Path, sweep_dir: Path, total: int | None, done: int | None = None) -> str:
-    """``[3/6] 2_controller=hqp,robot=fr3 · ok · docked · peak 12.3 N · 4.2 s``.
+    """``[3/6] 2_controller=hqp,robot=fr3 · ok · docked · peak 12.3 N · 4.2 s``; a bouncing
+    hold adds ``· 203 contact events/s``, a failed gate its verdict (what failed).
 
     ``done``: the running count; by default the next number of :func:`next_count`.
     """
@@ -98,10 +99,15 @@ def job_line(out_dir: Path, sweep_dir: Path, total: int | None, done: int | None
         parts.append(docked)
         peak = record.get("peak_axial_force_N")
         parts.append("peak n/a" if peak is None else f"peak {peak:.1f} N")
+        events = record.get("steady_contact_events_per_s")
+        if events:  # a bouncing hold shows on the progress line
+            parts.append(f"{events:.0f} contact events/s")
     wall = record.get("wall_time_s")
     parts.append("n/a" if wall is None else f"{wall:.1f} s")
     if status in ("failed", "interrupted") and record.get("error"):
         parts.append(str(record["error"])[:160])
+    elif success is False and record.get("gate_verdict"):
+        parts.append(str(record["gate_verdict"])[:160])  # what failed
     return " · ".join(parts)
 
 

@@ -4,7 +4,7 @@ import json
 
 import pytest
 
-from compliant_docking.evaluation.registry import DOCKING_KEYS
+from compliant_docking.evaluation.registry import CONTACT_KEYS, DOCKING_KEYS
 from compliant_docking.run.runner import execute
 from tests.helpers import make_cfg, run_cli
 
@@ -23,6 +23,8 @@ REQUIRED = {
     "controller",
     "trajectory",
     *DOCKING_KEYS,
+    *CONTACT_KEYS,
+    "gate_verdict",
 }
 
 
@@ -39,6 +41,9 @@ def test_default_scene_docks_under_gravity(tmp_path):
     assert record["peak_axial_force_N"] == pytest.approx(3.57, rel=0.1)
     assert record["steady_axial_force_N"] == pytest.approx(50.0 * 0.005, rel=1e-3)
     assert record["sim_time_s"] == pytest.approx(18.0)
+    # it touched once, at the seat, and holds still: no chatter, the gate says docked
+    assert record["gate_verdict"] == "docked" and record["steady_contact_events_per_s"] == 0.0
+    assert record["first_strike_force_N"] == pytest.approx(1.37, abs=0.05)  # the press, not a strike
     text = (tmp_path / "metrics.json").read_text()
     assert REQUIRED <= json.loads(text).keys()
     assert "NaN" not in text and "Infinity" not in text

@@ -270,7 +270,7 @@ def test_yaw_inside_the_play_docks_and_beyond_the_capture_fails_naming_the_key(t
     )
     assert beyond["status"] == "ok" and beyond["success"] is False
     assert "key yaw" in beyond["gate_failures"] and "not lined up" in beyond["gate_failures"]
-    assert "seat depth error" in beyond["gate_failures"]
+    assert "not seated: tip up to" in beyond["gate_failures"]
     # stopped at the bore mouth, 30 mm above the seat: only the 3 mm chamfer enters
     assert beyond["seat_depth_error_m"] > 0.025
 

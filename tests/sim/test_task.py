@@ -58,6 +58,10 @@ def test_a_run_shorter_than_its_trajectory_is_incomplete(tmp_path):
     )
     assert record["status"] == "incomplete" and record["success"] is False
     assert "shorter than the trajectory" in record["gate_failures"]
+    assert (
+        record["gate_verdict"].startswith("not docked: ")
+        and "shorter than the trajectory" in record["gate_verdict"]
+    )
     assert record["sim_time_s"] == pytest.approx(3.0)
 
 

@@ -187,6 +187,15 @@ def test_job_line_and_exit_status(tmp_path):
     )
     # the second line of this sweep: numbered 2 (each call is a job finishing)
     assert job_line(job, tmp_path / "sweep", None) == "[2 done] 3_controller=hqp · FAILED · 1.0 s · diverged"
+    bouncing = {"status": "ok", "success": False, "peak_axial_force_N": 24.1, "wall_time_s": 4.2}
+    bouncing.update(
+        steady_contact_events_per_s=203.0, gate_verdict="seated; contact chatter: 203 make/break events/s"
+    )
+    (job / "metrics.json").write_text(json.dumps(bouncing))
+    assert job_line(job, tmp_path / "sweep", 6) == (
+        "[3/6] 3_controller=hqp · ok · not docked · peak 24.1 N · 203 contact events/s · 4.2 s · "
+        "seated; contact chatter: 203 make/break events/s"
+    )
     outcome = dict(sweep_dir=tmp_path, jobs=4, ok=4, docked=0, unfinished=0, summary={})
     assert SweepOutcome(failed=0, aborted=False, **outcome).exit_status == 0  # not docked ≠ failed
     assert SweepOutcome(failed=1, aborted=False, **outcome).exit_status == 1
