@@ -193,10 +193,10 @@ def prepare(cfg: DictConfig) -> Simulation:
     planner.sample(0.0, ref)
     q0 = arm.solve_ik(pin.SE3(ref.rot.copy(), ref.pos.copy()), np.asarray(cfg.robot.ik_guess, dtype=float))
 
+    limits = np.asarray(cfg.robot.max_torque, dtype=float)
+    model.actuator_ctrlrange[:] = np.column_stack([-limits, limits])  # the software clip
     data = mujoco.MjData(model)
-    data.qpos[:] = q0
-    data.qvel[:] = 0.0
-    mujoco.mj_forward(model, data)
+    start_held(model, data, q0)
     n_steps = int(round(duration / model.opt.timestep))
     too_large = memory_problem(cfg, n_steps=n_steps)  # before the logs are allocated
     if too_large:
@@ -213,8 +213,6 @@ def prepare(cfg: DictConfig) -> Simulation:
         axis=waypoints.axis,
     )
     controller = instantiate(cfg.controller, _partial_=True, _convert_="all")(context=context)
-    limits = context.torque_limits
-    model.actuator_ctrlrange[:] = np.column_stack([-limits, limits])  # the software clip
     return Simulation(
         cfg=cfg,
         scene=scene,
@@ -230,6 +228,28 @@ def prepare(cfg: DictConfig) -> Simulation:
     )
 
 
+def start_held(model: mujoco.MjModel, data: mujoco.MjData, q0: np.ndarray) -> None:
+    """The state before the first step: the arm at rest at ``q0``, held there against gravity.
+
+    The run starts with the arm at rest, held as a real arm is held before its run starts
+    (by its controller or brakes). So the motors carry the static gravity-holding torque
+    (MuJoCo's own bias force at v = 0, within the software clip) in the forward pass that
+    gives the first sensor reading: the F/T sensor then reads what it reads on a held arm,
+    the tool's weight, which the payload compensation removes (≈ 1e-14 N). Without it the
+    arm would be in free fall for that pass, and the first wrench, the one the controller
+    gets at t = 0 and the time series' row 0, would be minus the tool's weight (3.6 N on
+    the iiwa14 under Earth gravity): a force that is no contact. In zero gravity the
+    holding torque is zero and nothing changes. The first step overwrites the command.
+    """
+    data.qpos[:] = q0
+    data.qvel[:] = 0.0
+    data.ctrl[:] = 0.0
+    mujoco.mj_forward(model, data)
+    if np.any(data.qfrc_bias):  # gravity: hold the arm (one actuator per joint, in order)
+        data.ctrl[:] = data.qfrc_bias / model.actuator_gear[:, 0]
+        mujoco.mj_forward(model, data)
+
+
 def replay_physics(sim: Simulation) -> float:
     """Re-simulate the recorded torques with physics only; returns the loop's wall time [s].
 
@@ -238,8 +258,7 @@ def replay_physics(sim: Simulation) -> float:
     """
     model = sim.scene.model
     data = mujoco.MjData(model)
-    data.qpos[:] = sim.q0
-    mujoco.mj_forward(model, data)
+    start_held(model, data, sim.q0)
     torques = sim.telemetry.tau_cmd[: sim.telemetry.count]
     ctrl, mj_step = data.ctrl, mujoco.mj_step
     start = time.perf_counter()

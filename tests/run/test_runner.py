@@ -44,6 +44,9 @@ def test_default_scene_docks_under_gravity(tmp_path):
     # it touched once, at the seat, and holds still: no chatter, the gate says docked
     assert record["gate_verdict"] == "docked" and record["steady_contact_events_per_s"] == 0.0
     assert record["first_strike_force_N"] == pytest.approx(1.37, abs=0.05)  # the press, not a strike
+    # the peak is the contact's, in zero and in Earth gravity alike: no reading at t = 0
+    # shows a force that is no contact (it used to be the tool's weight, 3.6 N, under gravity)
+    assert record["peak_axial_force_N"] == pytest.approx(record["first_strike_force_N"], abs=0.01)
     text = (tmp_path / "metrics.json").read_text()
     assert REQUIRED <= json.loads(text).keys()
     assert "NaN" not in text and "Infinity" not in text
