@@ -142,7 +142,11 @@ class Draw:
         if record.get("status") == "failed":
             return f"failed: {record.get('error') or 'no reason recorded'}"
         if require_docking and record.get("success") is not True:
-            return f"not docked: {record.get('gate_failures') or 'no docking gate (success is null)'}"
+            # the docking gate's verdict says what failed ("seated; …" or "not docked: …")
+            verdict = record.get("gate_verdict")
+            return (
+                verdict or f"not docked: {record.get('gate_failures') or 'no docking gate (success is null)'}"
+            )
         for key in keys.values():
             value = record.get(key)
             if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value):

@@ -46,7 +46,8 @@ class RuleLauncher:
                 "status": "ok",
                 "success": docked,
                 "gate_failures": None if docked else "seat depth error 2 mm > 1 mm",
-                "peak_axial_force_N": 1e4 / k + seed,
+                "first_strike_force_N": 1e4 / k + seed,  # the objective's force
+                "peak_axial_force_N": 1e4 / k + seed,  # its fallback
                 "seated_time_s": 14.0 + seed,
             }
             (job_dir / "metrics.json").write_text(json.dumps(record))
