@@ -34,6 +34,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 
 DOCKING = "compliant_docking/evaluation/docking.py"
+CONTACT = "compliant_docking/evaluation/contact.py"
 TRACKING = "compliant_docking/evaluation/tracking_gate.py"
 SENSOR = "compliant_docking/sim/sensor.py"
 IMPEDANCE = "compliant_docking/control/impedance.py"
@@ -41,12 +42,19 @@ SE3_LIE = "compliant_docking/control/se3_lie.py"
 HQP = "compliant_docking/control/hqp/controller.py"
 COMPLIANCE = "compliant_docking/control/hqp/compliance.py"
 BASE = "compliant_docking/control/base.py"
+SHAPING = "compliant_docking/control/shaping.py"
+INTEGRAL = "compliant_docking/control/integral.py"
 PROVENANCE = "compliant_docking/run/provenance.py"
 RUNNER = "compliant_docking/run/runner.py"
 TABLES = "compliant_docking/results/tables.py"
 
 METRIC_TESTS = ("tests/evaluation/test_docking.py", "tests/run/test_runner.py")
-GATE_TESTS = ("tests/evaluation/test_docking.py", "tests/run/test_runner.py")
+GATE_TESTS = (
+    "tests/evaluation/test_docking.py",
+    "tests/evaluation/test_contact.py",
+    "tests/run/test_runner.py",
+)
+CONTACT_TESTS = ("tests/evaluation/test_contact.py",)
 TRACKING_TESTS = ("tests/evaluation/test_tracking_gate.py",)
 SENSOR_TESTS = ("tests/sim/test_sensor.py", "tests/control/test_impedance.py")
 LAW_TESTS = (
@@ -221,8 +229,8 @@ MUTATIONS = (
     Mutation(
         "G1",
         DOCKING,
-        '        ("peak axial force", metrics["peak_axial_force_N"], gate.peak_force_budget_N, "N"),\n',
-        "",
+        "            gate.peak_force_budget_N,\n",
+        "            np.inf,\n",
         "peak-force check removed",
         GATE_TESTS,
         True,
@@ -230,8 +238,8 @@ MUTATIONS = (
     Mutation(
         "G2",
         DOCKING,
-        '        ("plug tilt", seat.tilt_deg, gate.tilt_tolerance_deg, "deg"),\n',
-        "",
+        "            gate.tilt_tolerance_deg,\n",
+        "            np.inf,\n",
         "tilt check removed",
         GATE_TESTS,
         True,
@@ -248,8 +256,8 @@ MUTATIONS = (
     Mutation(
         "G4",
         DOCKING,
-        '        ("seat depth error", seat.depth_error_m, gate.depth_tolerance_m, "m"),\n',
-        "",
+        "            gate.depth_tolerance_m,\n",
+        "            np.inf,\n",
         "depth check removed",
         GATE_TESTS,
         True,
@@ -257,8 +265,8 @@ MUTATIONS = (
     Mutation(
         "G5",
         DOCKING,
-        '        ("seat lateral error", seat.lateral_error_m, gate.lateral_tolerance_m, "m"),\n',
-        "",
+        "            gate.lateral_tolerance_m,\n",
+        "            np.inf,\n",
         "lateral check removed",
         GATE_TESTS,
     ),
@@ -285,6 +293,47 @@ MUTATIONS = (
         "        elif seat.key_yaw_deg > 3 * key_yaw_limit_deg:",
         "key-yaw tolerance × 3",
         GATE_TESTS,
+    ),
+    Mutation(
+        "G9",
+        DOCKING,
+        "                gate.max_contact_events_per_s,\n",
+        "                np.inf,\n",
+        "contact-chatter check removed",
+        GATE_TESTS,
+    ),
+    Mutation(
+        "G10",
+        DOCKING,
+        "max(float(gate.max_force_std_N), float(gate.max_force_std_ratio) * mean)",
+        "max(float(gate.max_force_std_N), float(gate.max_force_std_ratio) * mean) * 3",
+        "force-spread limit × 3",
+        GATE_TESTS,
+    ),
+    # ---------------------------------------------------------------- contact metrics
+    Mutation(
+        "K1",
+        CONTACT,
+        "        state = max(first - 1, 0)",
+        "        state = first",
+        "first contact read on the row after the state that found it",
+        CONTACT_TESTS,
+    ),
+    Mutation(
+        "K2",
+        CONTACT,
+        "    free = np.flatnonzero(contacts[start:stop] <= 0)",
+        "    free = np.flatnonzero(contacts[start:stop] < 0)",
+        "first strike never ends at the first opening",
+        CONTACT_TESTS,
+    ),
+    Mutation(
+        "K3",
+        CONTACT,
+        "    return int(np.count_nonzero(np.diff(touching)))",
+        "    return int(np.count_nonzero(np.diff(touching) > 0))",
+        "make/break events count the makes only",
+        CONTACT_TESTS,
     ),
     # ---------------------------------------------------------------- tracking gate
     Mutation(
@@ -458,6 +507,30 @@ MUTATIONS = (
         "        x *= self.f\n",
         "        x *= -self.f\n",
         "friction feed-forward against the motion",
+        LAW_TESTS,
+    ),
+    Mutation(
+        "C13",
+        SHAPING,
+        "        c = np.minimum(mu * (1.0 / self.ratio), 1.0)",
+        "        c = np.minimum(mu * self.ratio, 1.0)",
+        "apparent-inertia floor at 1/ratio instead of ratio",
+        ("tests/control/test_shaping.py",),
+    ),
+    Mutation(
+        "C14",
+        INTEGRAL,
+        "        if f0 * f0 + f1 * f1 + f2 * f2 > self.freeze_sq:",
+        "        if False:",
+        "integral action never frozen in contact",
+        ("tests/control/test_integral.py",),
+    ),
+    Mutation(
+        "C15",
+        BASE,
+        "            x = tau_pre - bias",
+        "            x = tau_pre + 0.0 * bias",
+        "torque_unbiased ignores the bias torques",
         LAW_TESTS,
     ),
     # ---------------------------------------------------------------- provenance, exit status
