@@ -50,7 +50,7 @@ def test_a_docking_gate_failure_exits_3(tmp_path):
     assert result.returncode == 3, result.stdout[-2000:] + result.stderr[-2000:]
     record = json.loads((run_dir / "metrics.json").read_text())
     assert record["status"] == "ok" and record["success"] is False
-    assert record["gate_failures"].startswith("seat depth error")
+    assert record["gate_failures"].startswith("not seated: ")
 
 
 def test_a_runtime_failure_exits_1(tmp_path):
