@@ -145,7 +145,7 @@ def _interrupted(sim, out_dir: Path, exc: KeyboardInterrupt) -> dict:
             fields = evaluate(sim, out_dir, figures=False)  # the partial time series, no figures
         except Exception as error:
             when += f" (the metrics of the partial run could not be computed: {_one_line(error)})"
-    fields.update(status="interrupted", success=False, gate_failures=None)
+    fields.update(status="interrupted", success=False, gate_failures=None, gate_verdict=None)
     return {**fields, "error": f"interrupted by {how}{when}"}
 
 

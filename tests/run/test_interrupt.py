@@ -59,6 +59,7 @@ def test_a_signalled_single_run_records_itself_as_interrupted(tmp_path, signum, 
     record = json.loads((run_dir / "metrics.json").read_text())
     assert record["status"] == "interrupted" and record["success"] is False
     assert record["error"].startswith(f"interrupted by {how} at t = ")
+    assert record["gate_verdict"] is None  # no gate is judged on a partial run
     assert 0 < record["steps"] < 200_000
     series = pd.read_parquet(run_dir / "timeseries.parquet")
     assert len(series) == record["steps"]  # the partial time series, every row complete
