@@ -22,8 +22,10 @@ $(STAMP): pyproject.toml
 run: $(STAMP) gl
 	$(PY) -m compliant_docking $(ARGS)
 
+# the fast suite on every core (pytest-xdist); `make test XDIST=0` runs it in one process
+XDIST ?= auto
 test: $(STAMP) gl
-	$(PY) -m pytest -q $(PYTEST_ARGS)
+	$(PY) -m pytest -q -n $(XDIST) $(PYTEST_ARGS)
 
 # ruff (lint and format) and mypy, configured in pyproject.toml; CI runs this before the tests
 lint: $(STAMP)
@@ -32,10 +34,10 @@ lint: $(STAMP)
 	$(VENV)/bin/mypy
 
 test-slow: $(STAMP) gl
-	$(PY) -m pytest -q -m slow $(PYTEST_ARGS)
+	$(PY) -m pytest -q -n $(XDIST) -m slow $(PYTEST_ARGS)
 
 test-all: $(STAMP) gl
-	$(PY) -m pytest -q -m 'slow or not slow' $(PYTEST_ARGS)
+	$(PY) -m pytest -q -n $(XDIST) -m 'slow or not slow' $(PYTEST_ARGS)
 
 # Offscreen rendering (render=video) without a display needs EGL (or OSMesa) from the
 # system, not from pip: check that one loads; if not, install Debian's EGL packages
