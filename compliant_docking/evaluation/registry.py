@@ -36,7 +36,9 @@ class Metric:
     unit it is shown in ("" for a pure number). ``scale``: metrics.json value → shown
     value. ``spec``: format of the shown value in the console. ``joint_key``: for a
     per-joint maximum, the key of its (0-based) joint index, shown 1-based.
-    ``compared``: a row of the comparison table (summary.md, comparison.csv) and bars.
+    ``compared``: a row of the Table-10 comparison (summary.md) and bars. ``interval``: a
+    metric of the sweep statistics (results/compare.py): per configuration its mean and
+    median with bootstrap 95 % intervals, and paired tests between controllers.
     """
 
     key: str
@@ -47,6 +49,7 @@ class Metric:
     spec: str = ".3f"
     joint_key: str | None = None
     compared: bool = True
+    interval: bool = False
 
     @property
     def heading(self) -> str:
@@ -70,14 +73,14 @@ class Metric:
 
 METRICS: tuple[Metric, ...] = (
     # contact safety (Table 10)
-    Metric("peak_axial_force_N", CONTACT, "peak axial force", "N"),
+    Metric("peak_axial_force_N", CONTACT, "peak axial force", "N", interval=True),
     Metric("peak_wrench_norm_N", CONTACT, "peak wrench norm", "N"),
-    Metric("steady_axial_force_N", CONTACT, "steady axial force", "N"),
+    Metric("steady_axial_force_N", CONTACT, "steady axial force", "N", interval=True),
     Metric("steady_wrench_norm_N", CONTACT, "steady wrench norm", "N"),
     # what the contact did (docking runs; evaluation/contact.py): first contact, the first
     # strike, and how calm the hold is over the steady window
     Metric("first_contact_time_s", CONTACT_EVENTS, "first contact at", "s"),
-    Metric("first_strike_force_N", CONTACT_EVENTS, "first strike peak", "N", spec=".2f"),
+    Metric("first_strike_force_N", CONTACT_EVENTS, "first strike peak", "N", spec=".2f", interval=True),
     Metric("first_contact_lateral_offset_m", CONTACT_EVENTS, "offset at first contact", "mm", 1e3),
     Metric("first_contact_speed_m_s", CONTACT_EVENTS, "speed at first contact", "mm/s", 1e3, spec=".2f"),
     Metric("steady_force_mean_N", CONTACT_EVENTS, "steady |F| mean", "N"),
@@ -102,11 +105,12 @@ METRICS: tuple[Metric, ...] = (
     Metric("final_lateral_error_m", TRACKING, "final lateral error", "mm", 1e3),
     Metric("final_orientation_error_rad", TRACKING, "final orientation error", "deg", DEG_PER_RAD),
     # where the plug ended up, on the true socket pose (docking runs)
-    Metric("seat_depth_error_m", SEAT, "depth error", "mm", 1e3),
-    Metric("seat_lateral_error_m", SEAT, "lateral error", "mm", 1e3),
-    Metric("seat_tilt_deg", SEAT, "tilt", "deg"),
+    Metric("seat_depth_error_m", SEAT, "depth error", "mm", 1e3, interval=True),
+    Metric("seat_lateral_error_m", SEAT, "lateral error", "mm", 1e3, interval=True),
+    Metric("seat_tilt_deg", SEAT, "tilt", "deg", interval=True),
     Metric("seat_key_yaw_deg", SEAT, "key yaw", "deg"),  # keyed interfaces only (else null)
-    Metric("seated_time_s", SEAT, "seated at", "s", spec=".2f", compared=False),
+    # docking time: the first time the tip is within the depth tolerance of the true seat
+    Metric("seated_time_s", SEAT, "docking time (seated at)", "s", spec=".2f", compared=False, interval=True),
     # the run
     Metric("sim_time_s", RUN, "simulated", "s", spec=".2f", compared=False),
     Metric("real_time_factor", RUN, "loop speed", "× real time", spec=".1f"),
@@ -132,6 +136,11 @@ def in_section(section: str, *, compared_only: bool = False) -> list[Metric]:
 def compared() -> list[Metric]:
     """The metrics of the comparison table (summary.md, comparison.csv), in order."""
     return [m for m in METRICS if m.compared]
+
+
+def with_intervals() -> list[Metric]:
+    """The metrics of the sweep statistics (``interval``), in registry order."""
+    return [m for m in METRICS if m.interval]
 
 
 def finite_or_none(value) -> float | int | None:

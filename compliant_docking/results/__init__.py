@@ -2,11 +2,15 @@
 
 - :mod:`.load`: :func:`load_runs` (one row per job directory), :func:`scan`,
   :func:`newest_sweep`, :func:`locate_runs`;
-- :mod:`.tables`: the comparison table, counts, ``summary.md`` and the summary files;
+- :mod:`.tables`: configurations and their labels, the Table-10 comparison table, counts;
+- :mod:`.stats`: Wilson and bootstrap intervals, paired tests, Holm's correction;
+- :mod:`.compare`: per-configuration statistics and paired comparisons of a frame;
+- :mod:`.summary`: ``summary.md`` and the summary files;
 - :mod:`.figures`: comparison figures across runs;
 - :mod:`.report`: ``python -m compliant_docking.report PATH``.
 """
 
+from compliant_docking.results.compare import configuration_stats, paired_comparisons
 from compliant_docking.results.load import (
     BASE_COLUMNS,
     GROUPS,
@@ -17,6 +21,7 @@ from compliant_docking.results.load import (
     scan,
     sweep_started,
 )
+from compliant_docking.results.summary import summary_markdown, write_summary
 from compliant_docking.results.tables import (
     Counts,
     comparison_markdown,
@@ -25,8 +30,6 @@ from compliant_docking.results.tables import (
     configuration_labels,
     counts,
     jobs_markdown,
-    summary_markdown,
-    write_summary,
 )
 
 __all__ = [
@@ -38,11 +41,13 @@ __all__ = [
     "comparison_table",
     "configuration_keys",
     "configuration_labels",
+    "configuration_stats",
     "counts",
     "jobs_markdown",
     "load_runs",
     "locate_runs",
     "newest_sweep",
+    "paired_comparisons",
     "scan",
     "sweep_started",
     "summary_markdown",

@@ -27,7 +27,8 @@ import warnings
 from pathlib import Path
 
 from compliant_docking.results.load import RunSkippedWarning, scan
-from compliant_docking.results.tables import counts, write_summary
+from compliant_docking.results.summary import write_summary
+from compliant_docking.results.tables import counts
 from compliant_docking.run.rundir import read_metrics
 
 

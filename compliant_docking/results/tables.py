@@ -1,30 +1,22 @@
-"""The comparison of a set of runs: configurations, the metrics table, counts and the sweep
-summary files (``summary.parquet``, ``summary.csv``, ``comparison.csv``, ``summary.md``).
+"""The comparison of a set of runs: configurations and their labels, the Table-10 metrics
+table, job lines and counts (the summary files: :mod:`compliant_docking.results.summary`).
 
 :func:`comparison_table` turns the rows of :func:`~compliant_docking.results.load.load_runs`
 into one column per configuration and one row per compared metric of the registry
-(:mod:`compliant_docking.evaluation.registry`), grouped by section, plus the outcome;
-:func:`write_summary` writes the files.
+(:mod:`compliant_docking.evaluation.registry`), grouped by section, plus the outcome.
 """
 
 from __future__ import annotations
 
 import math
-import os
 import re
 from dataclasses import dataclass
-from datetime import datetime
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
 from compliant_docking.evaluation.registry import compared
-from compliant_docking.results.load import GROUPS
-from compliant_docking.run.files import atomic_write
-
-#: files written by :func:`write_summary`
-SUMMARY_FILES = ("summary.parquet", "summary.csv", "comparison.csv", "summary.md")
+from compliant_docking.results.load import GROUPS, OVERRIDDEN
 
 SUCCESS_SECTION = "success"
 #: keys that repeat a configuration rather than define one
@@ -41,15 +33,21 @@ def configuration_keys(df: pd.DataFrame) -> list[str]:
     """The columns that tell the configurations of ``df`` apart.
 
     Candidates are the config choices (``robot``, ``controller``, …, ``experiment``)
-    and the dotted override columns (``controller.k``, ``task.misalignment.x_range``;
-    metrics.json keys are never dotted); kept are those whose value varies across the
-    rows, except repeat keys (any ``…seed``): repeats of one configuration are pooled
-    (success rate, means), and cosmetic keys (``task.progress``).
+    and the dotted keys some job overrode (``controller.k``, ``task.misalignment.x_range``;
+    listed in the ``overridden`` column; a frame without that column: every dotted
+    column) — not the config leaves that follow from a choice (``controller.k`` of a
+    robot's gain file); kept are those whose value varies across the rows, except repeat
+    keys (any ``…seed``): repeats of one configuration are pooled (success rate, means),
+    and cosmetic keys (``task.progress``).
     """
     if df.empty:
         return []
     candidates = [g for g in GROUPS if g in df.columns]
-    candidates += [c for c in df.columns if "." in c and c not in candidates]
+    if OVERRIDDEN in df.columns:
+        named = {k for keys in df[OVERRIDDEN].dropna() for k in str(keys).split(",")}
+        candidates += [c for c in df.columns if "." in c and c in named and c not in candidates]
+    else:
+        candidates += [c for c in df.columns if "." in c and c not in candidates]
     return [
         c
         for c in candidates
@@ -65,6 +63,76 @@ def _short(key: str, keys: list[str]) -> str:
     return key if clash else last
 
 
+#: short labels of well-known keys: key → (name, scale to the shown unit, unit)
+KNOWN_KEYS = {
+    "task.misalignment.x": ("x", 1e3, "mm"),
+    "task.misalignment.y": ("y", 1e3, "mm"),
+    "task.misalignment.yaw_deg": ("yaw", 1.0, "°"),
+    "task.misalignment.tilt_deg": ("tilt", 1.0, "°"),
+    "task.misalignment.x_range": ("x", 1e3, "mm"),
+    "task.misalignment.y_range": ("y", 1e3, "mm"),
+    "task.misalignment.yaw_deg_range": ("yaw", 1.0, "°"),
+    "task.misalignment.tilt_deg_range": ("tilt", 1.0, "°"),
+    "target.geometry.radial_clearance": ("clearance", 1e3, "mm"),
+}
+
+
+def _bounds(value) -> list[float] | None:
+    """[low, high] of a range value (a list, or its JSON / override text), else None."""
+    if isinstance(value, str):
+        try:
+            value = [float(v) for v in value.strip("[] ").split(",")]
+        except ValueError:
+            return None
+    if isinstance(value, (list, tuple)) and len(value) == 2:
+        return [float(v) for v in value]
+    return None
+
+
+def short_label(key: str, value, keys: list[str] | None = None) -> str:
+    """``x ±2 mm``, ``tilt 0–1.5°``, ``clearance 0.4 mm`` for the misalignment and clearance
+    keys (:data:`KNOWN_KEYS`); ``short_key=value`` otherwise; a config choice alone."""
+    if key in GROUPS:
+        return _format_value(value)
+    if key in KNOWN_KEYS and not (value is None or (isinstance(value, float) and math.isnan(value))):
+        name, scale, unit = KNOWN_KEYS[key]
+        space = "" if unit == "°" else " "
+        if key.endswith("_range"):
+            bounds = _bounds(value)
+            if bounds is not None:
+                low, high = (b * scale for b in bounds)
+                if low == -high and high > 0:
+                    return f"{name} ±{high:g}{space}{unit}"
+                return f"{name} {low:g}–{high:g}{space}{unit}"
+        elif isinstance(value, (int, float)):
+            return f"{name} {value * scale:g}{space}{unit}"
+    return f"{_short(key, keys or [key])}={_format_value(value)}"
+
+
+def drawn_label(row) -> str:
+    """The misalignment a job drew, short: ``x +1.20 y −0.40 mm · tilt 0.8° (yaw 120°)``;
+    '' when the job has none (free space, or every component zero)."""
+
+    def number(key: str) -> float:
+        value = row.get(key) if hasattr(row, "get") else None
+        try:
+            value = float(value)  # type: ignore[arg-type]
+        except (TypeError, ValueError):
+            return 0.0
+        return 0.0 if math.isnan(value) else value
+
+    x, y = number("misalignment_x_m") * 1e3, number("misalignment_y_m") * 1e3
+    yaw, tilt = number("misalignment_yaw_deg"), number("misalignment_tilt_deg")
+    parts = []
+    if x or y:
+        parts.append(f"x {x:+.2f} y {y:+.2f} mm".replace("-", "−"))
+    if tilt:
+        parts.append(f"tilt {tilt:.2f}°" + (f" (yaw {yaw:.0f}°)" if yaw else ""))
+    elif yaw:
+        parts.append(f"yaw {yaw:+.2f}°".replace("-", "−"))
+    return " · ".join(parts)
+
+
 def _format_value(value) -> str:
     if value is None or (isinstance(value, float) and math.isnan(value)):
         return "default"
@@ -76,20 +144,17 @@ def _format_value(value) -> str:
 def configuration_labels(df: pd.DataFrame, keys: list[str] | None = None) -> pd.Series:
     """A readable label per row: the values of :func:`configuration_keys`, ' · '-joined.
 
-    Config choices show their value alone (``fr3 · hqp``), other keys as
-    ``short_key=value`` (``radial_clearance=0.0004``). With nothing varying, every row
-    is labelled by its choices ``robot · controller · trajectory``.
+    Config choices show their value alone (``fr3 · hqp``), the misalignment and clearance
+    keys in their unit (``x ±2 mm``, ``clearance 0.4 mm``: :func:`short_label`), other keys
+    as ``short_key=value`` (``k=300``). With nothing varying, every row is labelled by its
+    choices ``robot · controller · trajectory``.
     """
     keys = configuration_keys(df) if keys is None else keys
     if not keys:
         keys = [g for g in ("robot", "controller", "trajectory") if g in df.columns]
 
     def label(row) -> str:
-        parts = []
-        for key in keys:
-            value = _format_value(row.get(key))
-            parts.append(value if key in GROUPS else f"{_short(key, keys)}={value}")
-        return " · ".join(parts) or str(row.get("job"))
+        return " · ".join(short_label(key, row.get(key), keys) for key in keys) or str(row.get("job"))
 
     return df.apply(label, axis=1) if len(df) else pd.Series([], dtype=object)
 
@@ -174,24 +239,45 @@ def _markdown_grid(header: list[str], rows: list[list[str]], align_right: bool =
     return "\n".join([line(header), rule, *(line(r) for r in rows)])
 
 
-def comparison_markdown(table: pd.DataFrame) -> str:
-    """The comparison as a Markdown pipe table, sections as bold rows."""
-    header = ["metric", *map(str, table.columns)]
-    rows: list[list[str]] = []
-    section = None
-    for (sec, metric), values in table.iterrows():
-        if sec != section:
-            rows.append([f"**{sec}**", *[""] * len(table.columns)])
-            section = sec
-        rows.append([metric, *(_cell(v, metric) for v in values)])
-    return _markdown_grid(header, rows)
+#: beyond this many configurations the comparison is transposed (one row per configuration)
+WIDE = 6
+
+
+def comparison_markdown(table: pd.DataFrame, max_columns: int = WIDE) -> str:
+    """The comparison as Markdown: up to ``max_columns`` configurations one column each
+    (metrics as rows, sections as bold rows); more, one table per section with one row per
+    configuration (so the table stays readable at 18+ configurations)."""
+    if len(table.columns) <= max_columns:
+        header = ["metric", *map(str, table.columns)]
+        rows: list[list[str]] = []
+        section = None
+        for (sec, metric), values in table.iterrows():
+            if sec != section:
+                rows.append([f"**{sec}**", *[""] * len(table.columns)])
+                section = sec
+            rows.append([metric, *(_cell(v, metric) for v in values)])
+        return _markdown_grid(header, rows)
+    blocks = []
+    for sec in dict.fromkeys(table.index.get_level_values(0)):
+        part = table.loc[sec]
+        part = part[part.notna().any(axis=1)]  # a metric no configuration has (e.g. key yaw)
+        if part.empty:
+            continue
+        header = ["configuration", *map(str, part.index)]
+        rows = [[str(c), *(_cell(part.at[m, c], m) for m in part.index)] for c in part.columns]
+        blocks.append(f"**{sec}**\n\n" + _markdown_grid(header, rows))
+    return "\n\n".join(blocks)
 
 
 def jobs_markdown(df: pd.DataFrame) -> str:
-    """One line per job: name, status, docked, peak axial force, wall time, reason."""
-    header = ["job", "status", "docked", "peak axial force [N]", "wall time [s]", "error / gate"]
+    """One line per job: name, status, docked, the drawn misalignment, peak axial force,
+    wall time, reason."""
+    drawn = df.apply(drawn_label, axis=1) if len(df) else pd.Series([], dtype=object)
+    show_drawn = bool(len(df)) and drawn.astype(bool).any()
+    header = ["job", "status", "docked", *(["drawn misalignment"] if show_drawn else [])]
+    header += ["peak axial force [N]", "wall time [s]", "error / gate"]
     rows = []
-    for _, r in df.iterrows():
+    for index, r in df.iterrows():
         success = r.get("success")
         docked = (
             "n/a"
@@ -205,6 +291,7 @@ def jobs_markdown(df: pd.DataFrame) -> str:
                 str(r["job"]),
                 str(r["status"]),
                 docked,
+                *([drawn[index]] if show_drawn else []),
                 _cell(r.get("peak_axial_force_N"), ""),
                 _cell(r.get("wall_time_s"), ""),
                 reason.replace("|", "/"),
@@ -215,7 +302,8 @@ def jobs_markdown(df: pd.DataFrame) -> str:
 
 @dataclass(frozen=True)
 class Counts:
-    """Outcome of a set of jobs."""
+    """Outcome of a set of jobs. *Finished* is a job that ran (status ok or incomplete:
+    it has results); *docked* a finished job that passed its gate (success true)."""
 
     jobs: int
     ok: int  # status ok
@@ -223,15 +311,24 @@ class Counts:
     failed: int  # status failed or interrupted
     docked: int  # success true
     unfinished: int = 0  # job directories without a finished metrics.json
+    no_gate: int = 0  # finished without a gate to pass (success null: free-space holds)
+
+    @property
+    def finished(self) -> int:
+        return self.ok + self.incomplete
 
     def line(self) -> str:
+        """``18 jobs: 17 finished (15 docked, 2 not docked), 1 failed``."""
+        outcome = [f"{self.docked} docked", f"{self.finished - self.docked - self.no_gate} not docked"]
+        if self.no_gate:
+            outcome.append(f"{self.no_gate} without a gate")
         text = (
-            f"{self.jobs + self.unfinished} jobs: {self.ok} succeeded, "
-            f"{self.failed + self.unfinished} failed, {self.docked} docked"
+            f"{self.jobs + self.unfinished} jobs: {self.finished} finished ({', '.join(outcome)}), "
+            f"{self.failed + self.unfinished} failed"
         )
         extra = []
         if self.incomplete:
-            extra.append(f"{self.incomplete} incomplete")
+            extra.append(f"{self.incomplete} of the finished incomplete")
         if self.unfinished:
             extra.append(f"{self.unfinished} without metrics.json (crashed or cut short)")
         return text + (f" ({', '.join(extra)})" if extra else "")
@@ -240,6 +337,7 @@ class Counts:
 def counts(df: pd.DataFrame, unfinished: int = 0) -> Counts:
     status = df["status"] if "status" in df else pd.Series([], dtype=object)
     success = df["success"] if "success" in df else pd.Series([], dtype=object)
+    finished = ~status.isin(FAILED_STATUSES)
     return Counts(
         jobs=len(df),
         ok=int((status == "ok").sum()),
@@ -247,79 +345,5 @@ def counts(df: pd.DataFrame, unfinished: int = 0) -> Counts:
         failed=int(status.isin(FAILED_STATUSES).sum()),
         docked=int((success == True).sum()),  # noqa: E712
         unfinished=unfinished,
+        no_gate=int((finished & success.isna()).sum()) if len(success) else 0,
     )
-
-
-def summary_markdown(df: pd.DataFrame, title: str, unfinished: list[Path] | None = None) -> str:
-    """summary.md: counts, the Table-10 comparison and the list of jobs."""
-    unfinished = unfinished or []
-    parts = [
-        f"# {title}",
-        "",
-        f"{counts(df, len(unfinished)).line()}. Written "
-        f"{datetime.now().isoformat(timespec='seconds')} by compliant_docking.results; "
-        "rebuild with `python -m compliant_docking.report PATH`.",
-        "",
-    ]
-    if len(df):
-        keys = configuration_keys(df)
-        pooled = [c for c in df.columns if REPEAT_KEYS.search(c) and df[c].nunique() > 1]
-        note = (
-            "Mean over the jobs of each configuration"
-            + (f" (repeats over {', '.join(pooled)} pooled)" if pooled else "")
-            + "; configurations differ in: "
-            + (", ".join(keys) or "nothing (one configuration)")
-            + "."
-        )
-        parts += [
-            "## Comparison (Table 10)",
-            "",
-            note,
-            "",
-            comparison_markdown(comparison_table(df, keys)),
-            "",
-        ]
-        parts += ["## Jobs", "", jobs_markdown(df), ""]
-    if unfinished:
-        parts += ["## Without a finished metrics.json", ""]
-        parts += [f"- `{p}`" for p in unfinished] + [""]
-    return "\n".join(parts)
-
-
-def arrow_safe(df: pd.DataFrame) -> pd.DataFrame:
-    """A copy whose object columns hold one type each (mixed → str), for Parquet."""
-    out = df.copy()
-    for column in out.columns:
-        if out[column].dtype != object:
-            continue
-        types = {type(v) for v in out[column].dropna()}
-        if len(types) > 1 and not types <= {int, float}:
-            if types <= {bool, type(None)}:
-                continue
-            out[column] = out[column].map(lambda v: None if v is None else str(v))
-    return out
-
-
-def write_summary(
-    df: pd.DataFrame,
-    out_dir: str | os.PathLike,
-    *,
-    title: str | None = None,
-    unfinished: list[Path] | None = None,
-) -> dict[str, Path]:
-    """Write summary.parquet, summary.csv (one row per job), comparison.csv and summary.md.
-
-    Each file is written under a temporary name and renamed. Returns {name: path}.
-    """
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    title = title or f"Runs in {out.name}"
-    paths = {name: out / name for name in SUMMARY_FILES}
-    safe = arrow_safe(df)
-    atomic_write(paths["summary.parquet"], lambda p: safe.to_parquet(p, index=False))
-    atomic_write(paths["summary.csv"], lambda p: df.to_csv(p, index=False))
-    table = comparison_table(df) if len(df) else pd.DataFrame()
-    atomic_write(paths["comparison.csv"], lambda p: table.to_csv(p))
-    text = summary_markdown(df, title, unfinished)
-    atomic_write(paths["summary.md"], lambda p: p.write_text(text + "\n", encoding="utf-8"))
-    return paths

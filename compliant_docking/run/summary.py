@@ -44,7 +44,7 @@ def format_summary(record: dict, cfg: DictConfig | None = None) -> str:
     for label, value in rows:
         lines.append(label if value is None else f"  {label:<{width}} : {value}")
     status = r("status")
-    verdict = "success" if r("success") else ("FAILED" if status == "failed" else "not docked")
+    verdict = "docked" if r("success") else ("FAILED" if status == "failed" else "not docked")
     if status == "ok" and r("gate_verdict") and not r("success"):
         verdict = str(r("gate_verdict"))  # says what failed, e.g. "seated; peak force … over the budget"
     if status == "interrupted":
@@ -56,7 +56,13 @@ def format_summary(record: dict, cfg: DictConfig | None = None) -> str:
     success = "null" if r("success") is None else str(bool(r("success"))).lower()
     if rows:
         lines.append("-" * RULE_WIDTH)
-    lines.append(f"  status {status} · success {success} ({verdict})")
+    # "finished" (the run ran) is not "docked" (it passed its gate): both are said
+    ran = {"ok": "run finished", "incomplete": "run stopped short", "interrupted": "run interrupted"}
+    lines.append(
+        f"  {ran.get(str(status), 'run FAILED')}"
+        + ("" if status == "failed" else f" · {verdict}")
+        + f" (status {status} · success {success})"
+    )
     if r("error"):
         lines.append(f"  error: {r('error')}")
     if r("gate_failures") and verdict != r("gate_verdict"):  # the verdict already lists them

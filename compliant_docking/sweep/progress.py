@@ -76,8 +76,9 @@ def next_count(sweep_dir: Path) -> int | None:
 
 
 def job_line(out_dir: Path, sweep_dir: Path, total: int | None, done: int | None = None) -> str:
-    """``[3/6] 2_controller=hqp,robot=fr3 · ok · docked · peak 12.3 N · 4.2 s``; a bouncing
-    hold adds ``· 203 contact events/s``, a failed gate its verdict (what failed).
+    """``[3/6] 2_controller=hqp,robot=fr3 · finished · docked · peak 12.3 N · 4.2 s`` (status ok
+    is "finished": the job ran; whether it docked is the next field); a bouncing hold adds
+    ``· 203 contact events/s``, a failed gate its verdict (what failed).
 
     ``done``: the running count; by default the next number of :func:`next_count`.
     """
@@ -91,10 +92,10 @@ def job_line(out_dir: Path, sweep_dir: Path, total: int | None, done: int | None
     status = record.get("status")
     success = record.get("success")
     docked = {True: "docked", False: "not docked", None: "no gate"}.get(success, str(success))
-    parts = [
-        f"{count} {out_dir.name}",
-        str(status).upper() if status in ("failed", "interrupted") else str(status),
-    ]
+    shown_status = {"failed": "FAILED", "interrupted": "INTERRUPTED", "ok": "finished"}.get(
+        str(status), str(status)
+    )
+    parts = [f"{count} {out_dir.name}", shown_status]
     if status not in ("failed", "interrupted"):
         parts.append(docked)
         peak = record.get("peak_axial_force_N")

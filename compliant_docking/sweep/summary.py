@@ -1,8 +1,9 @@
 """The end of a sweep: the summary files, the console counts and the outcome.
 
 :func:`summarise` loads the sweep with :func:`compliant_docking.results.scan`, writes
-``summary.{parquet,csv,md}`` and ``comparison.csv`` (and the comparison figures under
-``comparison/``), prints how many jobs succeeded, failed and docked, and returns the
+``summary.{parquet,csv,md}``, ``comparison.{csv,parquet}`` and ``paired.{csv,parquet}`` (and
+the comparison figures under ``comparison/``), prints how many jobs finished, docked and
+failed, and returns the
 :class:`SweepOutcome`: exit status 1 when any job failed (or left no metrics.json), else
 0 — a job that ran but did not dock is a result, not a failure. An aborted sweep (a
 worker process died, Ctrl-C, SIGTERM) is summarised the same way after every job
@@ -145,25 +146,34 @@ def _report(
             lines.append(table)
         lines.append(
             f"  summary: {display(outcome.summary['summary.md'])} "
-            f"(+ summary.csv, summary.parquet, comparison.csv)"
+            f"(+ summary.csv/.parquet, comparison.csv/.parquet, paired.csv/.parquet)"
         )
     lines.append("=" * 64)
     emit("\n".join(lines))
 
 
 def _comparison_text(summary_md: Path, max_width: int = 160) -> str:
-    """The comparison table of summary.md when it fits a terminal, else ''."""
+    """From summary.md: the configurations table (jobs, docked, success rate with its
+    interval) when it fits a terminal, and the paired comparisons in words; else ''."""
     import shutil
 
     text = summary_md.read_text(encoding="utf-8")
-    start = text.find("## Comparison")
-    if start < 0:
-        return ""
-    block = text[start:].split("\n## ", 1)[0]
-    table = "\n".join(line for line in block.splitlines() if line.startswith("|"))
-    width = max((len(line) for line in table.splitlines()), default=0)
-    limit = max(shutil.get_terminal_size((max_width, 24)).columns, max_width)
-    return table if 0 < width <= limit else ""
+    parts = []
+    start = text.find("## Configurations")
+    if start >= 0:
+        block = text[start:].split("\n## ", 1)[0]
+        table = "\n".join(line for line in block.splitlines() if line.startswith("|"))
+        width = max((len(line) for line in table.splitlines()), default=0)
+        limit = max(shutil.get_terminal_size((max_width, 24)).columns, max_width)
+        if 0 < width <= limit and table.count("\n") > 2:  # more than one configuration
+            parts.append(table)
+    start = text.find("## Paired comparisons")
+    if start >= 0:
+        block = text[start:].split("\n## ", 1)[0].split("\n### ", 1)[0]
+        words = [line for line in block.splitlines() if line.startswith("- **")]
+        if words:
+            parts.append("paired comparisons (Holm-corrected, 5 %):\n" + "\n".join(words))
+    return "\n".join(parts)
 
 
 ORPHAN_ERROR = (

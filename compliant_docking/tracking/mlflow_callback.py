@@ -48,6 +48,7 @@ SWEEP_FILES = (
     "summary.md",
     "summary.csv",
     "comparison.csv",
+    "paired.csv",
     "best_params.yaml",
     "trials.csv",
 )

@@ -125,7 +125,7 @@ def test_sweep_directory_with_overrides_as_columns(tmp_path):
     assert df["error"].iloc[2] == "boom"
     assert configuration_keys(df) == ["controller", "target.geometry.radial_clearance", "task.stroke"]
     labels = configuration_labels(df)
-    assert labels.iloc[0] == "impedance · radial_clearance=0.0004 · stroke=default"
+    assert labels.iloc[0] == "impedance · clearance 0.4 mm · stroke=default"  # short, in its unit
 
 
 def test_nested_trees_and_unfinished_directories_are_skipped_with_a_warning(tmp_path):
@@ -212,7 +212,7 @@ def test_comparison_pools_repeats_and_counts_outcomes(tmp_path):
     assert np.isnan(table.loc[("contact safety", "peak axial force [N]"), "hqp"])  # no value: n/a
     text = comparison_markdown(table)
     assert "**contact safety**" in text and "75 %" in text and "n/a" in text
-    assert counts(df).line() == "5 jobs: 3 succeeded, 2 failed, 3 docked"
+    assert counts(df).line() == "5 jobs: 3 finished (3 docked, 0 not docked), 2 failed"
 
 
 def test_write_summary_and_report_command(tmp_path, capsys):
@@ -233,7 +233,7 @@ def test_write_summary_and_report_command(tmp_path, capsys):
 
     assert report.main([str(tmp_path), "--no-figures"]) == 0
     out = capsys.readouterr().out
-    assert "2 jobs: 1 succeeded, 1 failed, 1 docked" in out and "peak axial force" in out
+    assert "2 jobs: 1 finished (1 docked, 0 not docked), 1 failed" in out and "peak axial force" in out
     assert report.main([str(tmp_path / "nothing")]) == 2
 
 

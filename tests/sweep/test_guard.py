@@ -215,7 +215,7 @@ def test_two_sweeps_started_together_each_get_their_own_directory(tmp_path):
             line[:5] for line in result.stdout.splitlines() if line.startswith("[") and "/2]" in line
         )
         assert counts == ["[1/2]", "[2/2]"]  # no [4/2]: the other sweep's jobs are elsewhere
-        assert "2 jobs: 2 succeeded" in result.stdout
+        assert "2 jobs: 2 finished" in result.stdout
     sweeps = {p.parent for p in (tmp_path / "runs" / "multirun").glob("*/*/multirun.yaml")}
     assert len(sweeps) == 2 and not sweeps & blocked
     for sweep_dir in sweeps:

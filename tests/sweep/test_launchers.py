@@ -57,7 +57,10 @@ def test_the_default_pool_hydras_joblib_and_submitit_local_give_the_same_outputs
     for name, run in runs.items():
         assert run.returncode == 1, (name, run.stderr[-3000:])
         stdout = out[name][0]
-        assert "sweep finished in" in stdout and "3 jobs: 2 succeeded, 1 failed" in stdout
+        assert (
+            "sweep finished in" in stdout
+            and "3 jobs: 2 finished (0 docked, 0 not docked, 2 without a gate), 1 failed" in stdout
+        )
         assert "FAILED 2_" in stdout and "inverse kinematics" in stdout
         assert sorted(line[:6] for line in stdout.splitlines() if re.match(r"\[\d/3\] ", line)) == [
             "[1/3] ",
@@ -102,6 +105,9 @@ def test_the_default_pool_hydras_joblib_and_submitit_local_give_the_same_outputs
             "summary.csv",
             "summary.parquet",
             "comparison.csv",
+            "comparison.parquet",
+            "paired.csv",
+            "paired.parquet",
         }
     sa = pd.read_parquet(tmp_path / "pool" / "summary.parquet")
     for other in ("joblib", "submitit"):
@@ -113,7 +119,7 @@ def test_the_default_pool_hydras_joblib_and_submitit_local_give_the_same_outputs
     # submitit's logs and pickles: a hidden folder of the sweep, which load_runs never reads
     logs = list((tmp_path / "submitit" / ".submitit").rglob("*_log.out"))
     assert len(logs) == 3
-    assert any("· ok ·" in log.read_text() for log in logs)  # the job's own progress line
+    assert any("· finished ·" in log.read_text() for log in logs)  # the job's own progress line
     with warnings.catch_warnings():
         warnings.simplefilter("error", RunSkippedWarning)
         assert len(load_runs(tmp_path / "submitit")) == 3
@@ -209,6 +215,6 @@ def test_progress_watcher_prints_each_finished_job_once(tmp_path, capsys):
     watcher.poll()
     lines = capsys.readouterr().out.splitlines()
     assert len(lines) == 2
-    assert lines[0].startswith("[2/3] 1_b · ok") and lines[1].startswith("[3/3] 2_c · FAILED")
+    assert lines[0].startswith("[2/3] 1_b · finished") and lines[1].startswith("[3/3] 2_c · FAILED")
     watcher.poll()
     assert capsys.readouterr().out == ""
