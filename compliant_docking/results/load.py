@@ -13,6 +13,7 @@ Light on purpose (pandas, PyYAML, Hydra's override parser): no MuJoCo, no Pinocc
 
 from __future__ import annotations
 
+import json
 import os
 import re
 import warnings
@@ -23,6 +24,8 @@ from pathlib import Path
 import pandas as pd
 
 from compliant_docking.run.rundir import (
+    CONFIG_FILE,
+    HYDRA_DIR,
     MULTIRUN_FILE,
     find_job_dirs,
     read_metrics,
@@ -31,6 +34,10 @@ from compliant_docking.run.rundir import (
 
 #: columns every frame of :func:`load_runs` has, first, in this order
 BASE_COLUMNS = ("run_dir", "job", "status", "error", "success")
+#: the column listing the keys each job overrode (comma-joined; configurations differ in these)
+OVERRIDDEN = "overridden"
+#: prefix of a config leaf whose dotted name is already a metrics.json key
+CONFIG_PREFIX = "config."
 #: the config groups whose choice names a job (also recorded in metrics.json)
 GROUPS = ("robot", "controller", "trajectory", "tool", "target", "physics", "task", "experiment")
 
@@ -50,12 +57,24 @@ def load_runs(path: str | os.PathLike = "runs") -> pd.DataFrame:
       ``success`` (bool, or None for runs without a gate);
     - one column per command-line override of any job, named by its key without
       Hydra's prefixes: ``controller``, ``robot``, ``target.geometry.radial_clearance``,
-      ``task.misalignment.seed``, ``experiment``, … (NaN/None where a job did not set it);
+      ``task.misalignment.seed``, ``experiment``, … (NaN/None where a job did not set it
+      and has no composed config);
     - every key of metrics.json: the config choices (``robot``, ``controller``,
       ``trajectory``, … always set, whether overridden or not), ``overrides`` (the job's
       overrides, space-separated), the Table-10 metrics (``peak_axial_force_N``, …),
-      seat errors, the drawn misalignment (``misalignment_x_m``, …), timing, controller
-      diagnostics. JSON null becomes None/NaN.
+      seat errors, the drawn misalignment (``misalignment_x_m``, ``misalignment_y_m``,
+      ``misalignment_lateral_m``, ``misalignment_yaw_deg``, ``misalignment_tilt_deg``,
+      ``misalignment_seed``), timing, controller diagnostics. JSON null becomes None/NaN;
+    - ``overridden``: the keys the job overrode, comma-joined (what
+      :func:`~compliant_docking.results.tables.configuration_keys` looks at);
+    - every leaf of the job's resolved config (``.hydra/config.yaml``) as a dotted column:
+      ``controller.k``, ``physics.timestep``, ``target.geometry.radial_clearance``,
+      ``task.misalignment.x_range``, … in the config's units (SI unless the key names
+      another, docs/configuration.md); lists as their JSON text (``[-0.002, 0.002]``).
+      A leaf overridden on the command line fills the override's column (the resolved
+      value, the same number); a leaf whose name is a metrics.json key gets the prefix
+      ``config.``. Jobs without a composed config (a run made by ``runner.execute``
+      alone) have NaN/None there.
 
     Where an override and a metrics.json key share a name (``controller``), the
     metrics.json value (the choice the job used) is kept; they agree.
@@ -67,26 +86,80 @@ def load_runs(path: str | os.PathLike = "runs") -> pd.DataFrame:
     rows: list[dict] = []
     override_keys: list[str] = []
     metric_keys: list[str] = []
+    config_keys: list[str] = []
     for job_dir in find_job_dirs(path):
         record, problem = read_metrics(job_dir)
         if record is None:
             warnings.warn(f"skipping {job_dir}: {problem}", RunSkippedWarning, stacklevel=2)
             continue
         overrides = read_overrides(job_dir)
-        row = {"run_dir": str(job_dir.resolve()), "job": job_dir.name}
+        row: dict = {"run_dir": str(job_dir.resolve()), "job": job_dir.name}
         row.update(overrides)
         row.update(record)
+        row[OVERRIDDEN] = ",".join(overrides) or None
+        leaves: dict = {}
+        for key, value in config_leaves(job_dir).items():
+            if key in record or key in BASE_COLUMNS or key == OVERRIDDEN:
+                key = f"{CONFIG_PREFIX}{key}"  # never shadows a metric (none is dotted today)
+            leaves[key] = value
+        row.update(leaves)
         rows.append(row)
         _extend_unique(override_keys, overrides)
         _extend_unique(metric_keys, record)
+        _extend_unique(config_keys, leaves)
     columns = list(BASE_COLUMNS)
     _extend_unique(columns, override_keys)
     _extend_unique(columns, metric_keys)
+    _extend_unique(columns, [OVERRIDDEN] if rows else [])
+    _extend_unique(columns, config_keys)
     frame = pd.DataFrame(rows, columns=columns)
     for column in frame.columns:  # JSON numbers with nulls: numeric columns with NaN
         if frame[column].dtype == object and column not in ("success",):
             frame[column] = _maybe_numeric(frame[column])
     return frame
+
+
+def config_leaves(job_dir: Path) -> dict:
+    """Every leaf of the job's ``.hydra/config.yaml`` as {dotted key: value} ({} without one);
+    lists (and lists of lists) as their JSON text, so that a column holds one kind of value;
+    an interpolation of another key (``${tool.geometry.radius}``) replaced by its value."""
+    path = Path(job_dir) / HYDRA_DIR / CONFIG_FILE
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError:
+        return {}
+    try:
+        import yaml
+
+        loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)  # libyaml: ~10× faster
+        data = yaml.load(text, Loader=loader)  # noqa: S506 (a safe loader)
+    except Exception:
+        return {}
+    out: dict = {}
+    if isinstance(data, dict):
+        _flatten(data, "", out)
+    for _ in range(4):  # resolve ${other.key} (Hydra saves the config unresolved); chains too
+        pending = {k: v for k, v in out.items() if isinstance(v, str) and _REFERENCE.fullmatch(v)}
+        resolved = {k: out[v[2:-1]] for k, v in pending.items() if v[2:-1] in out}
+        if not resolved:
+            break
+        out.update(resolved)
+    return out
+
+
+#: an interpolation of another key of the same config: ``${tool.geometry.radius}``
+_REFERENCE = re.compile(r"\$\{[A-Za-z_][\w.]*\}")
+
+
+def _flatten(node: dict, prefix: str, out: dict) -> None:
+    for key, value in node.items():
+        name = f"{prefix}{key}"
+        if isinstance(value, dict) and value:
+            _flatten(value, name + ".", out)
+        elif isinstance(value, (list, tuple, dict)):
+            out[name] = json.dumps(value)
+        else:
+            out[name] = value
 
 
 def _extend_unique(target: list[str], keys: Iterable[str]) -> None:
