@@ -38,6 +38,18 @@ from compliant_docking.planning.twophase import segment_index
 _Y, _Z = np.array([0.0, 1.0, 0.0]), np.array([0.0, 0.0, 1.0])
 
 
+SEGMENT_NAMES = ("transition_1", "circle", "transition_2", "figure8")
+
+
+def segment_times(
+    transition_duration: float, circle_duration: float, figure8_duration: float
+) -> list[tuple[str, float, float]]:
+    """``(name, t_start, t_end)`` [s] of the four phases, back to back from t = 0 (also what
+    a run's figures mark, from its config alone)."""
+    bounds = np.cumsum([0.0, transition_duration, circle_duration, transition_duration, figure8_duration])
+    return [(name, float(bounds[i]), float(bounds[i + 1])) for i, name in enumerate(SEGMENT_NAMES)]
+
+
 class TrackingPlanner(Planner):
     """Transition, circle, transition, figure-8 (see the module doc). Lengths in m, times in s,
     frequencies in Hz."""
@@ -93,11 +105,9 @@ class TrackingPlanner(Planner):
             "transition_1": (self._p0, circle_start - self._p0),
             "transition_2": (circle_end, self._p0 - circle_end),
         }
-        bounds = np.cumsum([0.0, Tt, Tc, Tt, T8])
-        names = ("transition_1", "circle", "transition_2", "figure8")
-        self._segments = [(nm, float(bounds[i]), float(bounds[i + 1])) for i, nm in enumerate(names)]
-        self._starts = bounds[:-1]
-        self.duration = float(bounds[-1])
+        self._segments = segment_times(Tt, Tc, T8)
+        self._starts = np.array([t0 for _, t0, _ in self._segments])
+        self.duration = self._segments[-1][2]
 
     @property
     def segments(self) -> list[tuple[str, float, float]]:

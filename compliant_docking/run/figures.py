@@ -25,6 +25,45 @@ def wanted(cfg: Any, *, sweep: bool) -> bool:
     return (not sweep) if value is None else bool(value)
 
 
+def marks(cfg: Any, record: dict) -> Any:
+    """What the figures mark (:class:`compliant_docking.viz.plotting.RunMarks`) from the run's
+    config (plain data or DictConfig) and its metrics record: the force budget and the
+    seated time of a docking run; free space (no target); the segments and thresholds of
+    the tracking test."""
+    from compliant_docking.planning.tracking import segment_times
+    from compliant_docking.viz.plotting import RunMarks
+
+    task = cfg.get("task") or {}
+    target = cfg.get("target") or {}
+    trajectory = cfg.get("trajectory") or {}
+    free_space = target.get("name") == "none"
+    segments: tuple = ()
+    thresholds: dict = {}
+    if free_space and trajectory.get("name") == "tracking":
+        try:
+            segments = tuple(
+                segment_times(
+                    float(trajectory["transition_duration"]),
+                    float(trajectory["circle_duration"]),
+                    float(trajectory["figure8_duration"]),
+                )
+            )
+            thresholds = {
+                k: float(v) for k, v in dict(task.get("tracking_gate") or {}).items() if v is not None
+            }
+        except (KeyError, TypeError, ValueError):
+            segments = ()
+    budget = (task.get("gate") or {}).get("peak_force_budget_N")
+    seated = record.get("seated_time_s")
+    return RunMarks(
+        budget=None if free_space or budget is None else float(budget),
+        seated_time=None if seated is None else float(seated),
+        free_space=free_space,
+        segments=segments,
+        thresholds=thresholds,
+    )
+
+
 def draw(
     job_dir: Path,
     ts,
@@ -33,6 +72,7 @@ def draw(
     torque_limits: np.ndarray,
     title: str,
     formats: Sequence[str] | None = None,
+    marks: Any = None,
 ) -> list[Path]:
     """Draw the run's figures into ``job_dir/figures/`` (replacing the folder whole)."""
     from compliant_docking.viz.plotting import FORMATS, plot_run
@@ -42,7 +82,13 @@ def draw(
     def plot(folder: Path) -> None:
         files.extend(
             plot_run(
-                ts, folder, axis=axis, torque_limits=torque_limits, title=title, formats=formats or FORMATS
+                ts,
+                folder,
+                axis=axis,
+                torque_limits=torque_limits,
+                title=title,
+                formats=formats or FORMATS,
+                marks=marks,
             )
         )
 
@@ -65,6 +111,7 @@ def redraw(job_dir: Path, formats: Sequence[str] | None = None) -> list[Path]:
     except (KeyError, TypeError) as exc:
         raise ValueError(f".hydra/config.yaml lacks {exc}") from None
     ts = rundir.read_timeseries(job_dir)
+    record = rundir.read_metrics(job_dir)[0] or {}
     return draw(
         job_dir,
         ts,
@@ -72,6 +119,7 @@ def redraw(job_dir: Path, formats: Sequence[str] | None = None) -> list[Path]:
         torque_limits=torque_limits,
         title=" · ".join(names),
         formats=formats,
+        marks=marks(cfg, record),
     )
 
 

@@ -252,6 +252,7 @@ def evaluate(sim, out_dir: Path, *, figures: bool) -> dict:
             axis=axis,
             torque_limits=np.asarray(cfg.robot.max_torque, float),
             title=f"{cfg.robot.name} · {cfg.controller.name} · {cfg.trajectory.name}",
+            marks=run_figures.marks(cfg, result),
         )
     return result
 
