@@ -88,7 +88,7 @@ def test_resume_reruns_a_job_whose_artefact_is_corrupt_and_says_why(tmp_path):
     assert "· rerun: timeseries.parquet cannot be read (" in by_job[corrupt.name]
     assert "· rerun: its config changed since it ran (config hash 0000000000000000 → " in by_job[edited.name]
     assert by_job[kept.name].endswith(resume.SKIPPED)
-    assert "3 jobs: 3 succeeded" in result.stdout
+    assert "3 jobs: 3 finished" in result.stdout
     assert (
         len(pd.read_parquet(corrupt / "timeseries.parquet"))
         == json.loads((corrupt / "metrics.json").read_text())["steps"]
