@@ -4,6 +4,7 @@ by a path relative to the repository root (as the sweep prints it)."""
 from __future__ import annotations
 
 import json
+import re
 import shutil
 import sys
 import tempfile
@@ -62,7 +63,12 @@ def test_notebook_runs_top_to_bottom_on_a_sweep(
     monkeypatch, this_interpreter_kernel, sweep_in_the_repository
 ):
     sweep = sweep_in_the_repository / "sweep"
-    result = sweep_cli(sweep, *SHORT, "robot=iiwa14,fr3", "hydra.callbacks.sweep.figures=false")
+    # two controllers over the same three draws of the socket's pose (short runs)
+    short = [o for o in SHORT if not o.startswith("controller=")]
+    draws = ("task.misalignment.seed=range(3)", "task.misalignment.x_range=[-0.001,0.001]")
+    result = sweep_cli(
+        sweep, *short, "controller=impedance,hqp", *draws, "hydra.callbacks.sweep.figures=false"
+    )
     assert result.returncode == 0, result.stdout[-2000:] + result.stderr[-2000:]  # none failed
     assert (sweep / "summary.md").is_file()
 
@@ -83,11 +89,17 @@ def test_notebook_runs_top_to_bottom_on_a_sweep(
     outputs = [o for cell in nb.cells if cell.cell_type == "code" for o in cell.get("outputs", [])]
     text = "\n".join(o.get("text", "") for o in outputs if o.get("output_type") == "stream")
     assert f"reading {sweep}" in text
-    assert "2 jobs: 2 succeeded, 0 failed" in text
+    assert "6 jobs: 6 finished" in text and ", 0 failed" in text
     images = [o for o in outputs if "image/png" in o.get("data", {})]
-    assert len(images) >= 2  # the bars and the force overlay
+    assert len(images) >= 3  # the bars, the success against the lateral error, the force overlay
     tables = [o["data"]["text/markdown"] for o in outputs if "text/markdown" in o.get("data", {})]
-    assert any("**contact safety**" in t and "iiwa14" in t and "fr3" in t for t in tables)
+    assert any("**contact safety**" in t and "impedance" in t and "hqp" in t for t in tables)
+    # the comparison with intervals: success rates with Wilson's, means and medians with
+    # bootstrap intervals, and the paired test of the two controllers on the same draws
+    assert any("success rate [95 % CI]" in t and "hqp" in t for t in tables)
+    assert any("mean [95 % CI]" in t and re.search(r"\d \[-?\d", t) for t in tables)
+    assert any("**peak axial force [N]**, 1 comparison:" in t for t in tables)  # in words
+    assert any("| hqp − impedance |     3 |" in t and "p Holm" in t for t in tables)  # 3 pairs
 
 
 def test_notebook_is_committed_without_outputs():
