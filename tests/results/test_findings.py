@@ -1,0 +1,65 @@
+"""docs/findings.md's generator on synthetic sweeps whose answer is known."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.stats import wilcoxon
+
+from compliant_docking.results.findings import findings_markdown, main, pairs
+from tests.results.test_compare import frame
+
+
+def sweep(n: int = 12, *, effect: bool = True):
+    """The frame of test_compare (hqp strikes 5 N softer on every draw, fails the last two)
+    with the first-strike column; ``effect=False``: hqp strikes as impedance does."""
+    df = frame(n, robots=("fr3", "iiwa14"), controllers=("impedance", "hqp", "se3_lie"))
+    if not effect:
+        imp = df[df["controller"] == "impedance"].set_index(["robot", "task.misalignment.seed"])
+        is_hqp = df["controller"] == "hqp"
+        keys = list(zip(df.loc[is_hqp, "robot"], df.loc[is_hqp, "task.misalignment.seed"]))
+        df.loc[is_hqp, "peak_axial_force_N"] = imp.loc[keys, "peak_axial_force_N"].to_numpy() + 1e-3 * np.sin(
+            np.arange(is_hqp.sum())
+        )
+    df["first_strike_force_N"] = df["peak_axial_force_N"] * 0.5
+    df["git_commit"], df["git_dirty"] = "abc123", False
+    return df
+
+
+def test_pairs_join_the_same_draw_of_the_two_controllers():
+    df = sweep(8)
+    merged = pairs(df[df["robot"] == "fr3"], "impedance", "hqp")
+    assert len(merged) == 8  # one pair per draw, the other robot and se3_lie left out
+    assert (merged["task.misalignment.seed_a"] == merged["task.misalignment.seed_b"]).all()
+
+
+def test_a_real_reduction_is_found_with_its_interval_and_scipys_p(tmp_path):
+    df = sweep(12)
+    text = findings_markdown(df, tmp_path, command="python -m compliant_docking.results.findings X")
+    fr3 = df[df["robot"] == "fr3"]
+    a = fr3.loc[fr3["controller"] == "impedance", "first_strike_force_N"].to_numpy()
+    b = fr3.loc[fr3["controller"] == "hqp", "first_strike_force_N"].to_numpy()
+    p = wilcoxon(b - a).pvalue  # 12 pairs all lower: the exact p = 2/2^12
+    assert p == pytest.approx(2 / 4096)
+    answer = text.split("## Design")[0]
+    # first strike: lower with hqp, median paired difference about −2.5 N (half of −5 ± noise)
+    assert "**First strike**: lower with hqp" in answer and f"p = {p:.2g}," in answer
+    assert (
+        "**Cost in success**: 100 % docked with impedance, 83 % with hqp (2 draws only impedance docked, 0 only hqp; McNemar p = 0.5)"
+        in answer
+    )
+    assert "`abc123` (72 jobs) (clean tree)" in text and "results.findings X" in text
+
+
+def test_no_effect_is_said_to_be_no_significant_difference(tmp_path):
+    text = findings_markdown(sweep(12, effect=False), tmp_path)
+    assert "**First strike**: no significant difference" in text
+    assert "**Peak axial force**: no significant difference" in text
+    assert "**not reproduced**" in text  # −81 % lies far outside an interval around 0
+
+
+def test_the_command_refuses_a_sweep_without_the_controllers(tmp_path, capsys):
+    (tmp_path / "empty").mkdir()
+    with pytest.raises(SystemExit):
+        main([str(tmp_path / "empty")])
+    assert "no finished jobs" in capsys.readouterr().err
