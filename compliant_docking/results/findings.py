@@ -239,6 +239,17 @@ def findings_markdown(
         "",
         _markdown_grid(["", f"a: {baseline}", f"b: {candidate}", "b − a", "p", "test"], cost),
         "",
+        "## What this does and does not say",
+        "",
+        "- The forces are this repository's: `first_strike_force_N` is the peak of the axial force over "
+        "the first contact event (evaluation/contact.py), `peak_axial_force_N` the peak over the run; the "
+        "research code's 27.2 → 5.2 N came from its own interface, controllers and gains, so a difference "
+        "here says how the two controllers of this repository compare, not that the research code erred.",
+        "- The draws span the bounds above and nothing else (one interface, one approach per planner); a "
+        "finding outside them needs its own sweep (`task.misalignment.*_range`, `task.misalignment.seed`).",
+        "- No significant difference is not equality: the interval of the paired differences says how large "
+        "a difference the sweep still allows.",
+        "",
         "## Provenance",
         "",
         *_provenance(df, sweep, command),
