@@ -24,8 +24,8 @@ from itertools import combinations
 import numpy as np
 import pandas as pd
 
+import compliant_docking.results.stats as stats  # the module, not the package (no import cycle)
 from compliant_docking.evaluation import registry
-from compliant_docking.results import stats
 from compliant_docking.results.tables import (
     FAILED_STATUSES,
     NOT_MEASURED,

@@ -33,7 +33,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from compliant_docking.results import stats
+import compliant_docking.results.stats as stats  # the module, not the package (no import cycle)
 from compliant_docking.results.compare import ALPHA, draw_identity
 from compliant_docking.results.load import load_runs
 from compliant_docking.results.tables import FAILED_STATUSES, NOT_MEASURED, _markdown_grid

@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from compliant_docking.results import plots
+import compliant_docking.results.plots as plots  # the module, not the package (no import cycle)
 from compliant_docking.results.load import RunSkippedWarning
 from compliant_docking.results.tables import FAILED_STATUSES, configuration_labels
 from compliant_docking.run import rundir

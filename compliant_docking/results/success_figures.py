@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from compliant_docking.results import plots
+import compliant_docking.results.plots as plots  # the module, not the package (no import cycle)
 from compliant_docking.results.stats import wilson
 from compliant_docking.results.tables import configuration_keys
 
