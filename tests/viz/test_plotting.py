@@ -54,8 +54,11 @@ def drawn(monkeypatch):
     monkeypatch.setattr(plotting, "save", save)
     import matplotlib.pyplot as plt
 
+    close = plt.close
     monkeypatch.setattr(plt, "close", lambda fig=None: None)
-    return figures
+    yield figures
+    for fig in figures.values():
+        close(fig)
 
 
 def run(tmp_path, ts, marks: RunMarks) -> None:
