@@ -161,18 +161,18 @@ def paired_words(paired: pd.DataFrame, alpha: float = ALPHA) -> str:
             smallest = _num(tested["p_holm"].min(), 2)
             lines.append(head + f"none significant at {level} (smallest Holm p = {smallest}).")
             continue
-        items = [
-            f"{_pair(r)}: {_effect(r, key)}, p = {_num(r['p_value'], 2)} (Holm {_num(r['p_holm'], 2)})"
+        # one sub-item per significant difference (readable at 18 comparisons), then the rest
+        lines.append(head + f"{len(significant)} significant at {level}:")
+        lines += [
+            f"  - {_pair(r)}: {_effect(r, key)}, p = {_num(r['p_value'], 2)} (Holm {_num(r['p_holm'], 2)})"
             for _, r in significant.iterrows()
         ]
-        text = head + f"significant at {level}: " + "; ".join(items) + "."
         if len(rest):
-            text += (
-                " Not significant: "
+            lines.append(
+                f"  - not significant ({len(rest)}): "
                 + ", ".join(f"{_pair(r)} (Holm p {_num(r['p_holm'], 2)})" for _, r in rest.iterrows())
                 + "."
             )
-        lines.append(text)
     return "\n".join(lines)
 
 

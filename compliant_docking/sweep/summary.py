@@ -170,9 +170,16 @@ def _comparison_text(summary_md: Path, max_width: int = 160) -> str:
     start = text.find("## Paired comparisons")
     if start >= 0:
         block = text[start:].split("\n## ", 1)[0].split("\n### ", 1)[0]
-        words = [line for line in block.splitlines() if line.startswith("- **")]
+        # each metric and its significant differences; the others are named in summary.md
+        words = [
+            line
+            for line in block.splitlines()
+            if line.startswith("- **") or (line.startswith("  - ") and not line.startswith("  - not "))
+        ]
         if words:
-            parts.append("paired comparisons (Holm-corrected, 5 %):\n" + "\n".join(words))
+            parts.append(
+                "paired comparisons (Holm-corrected, 5 %; the rest in summary.md):\n" + "\n".join(words)
+            )
     return "\n".join(parts)
 
 

@@ -71,6 +71,9 @@ def test_notebook_runs_top_to_bottom_on_a_sweep(
     )
     assert result.returncode == 0, result.stdout[-2000:] + result.stderr[-2000:]  # none failed
     assert (sweep / "summary.md").is_file()
+    # the console's end: the paired comparison in words (the details are in summary.md)
+    assert "paired comparisons (Holm-corrected, 5 %; the rest in summary.md):" in result.stdout
+    assert "- **peak axial force [N]**, 1 comparison: " in result.stdout
 
     # as the sweep prints it: relative to the repository root, while the notebook runs in
     # analysis/ (so the path does not exist from the notebook's working directory)
