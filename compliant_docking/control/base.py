@@ -108,7 +108,7 @@ class TaskInertia:
         self._step += 1
         if check:
             anorm = lapack.dlange("1", lam_inv)
-        chol, x, info = _dposv(lam_inv, rhs, overwrite_a=1)
+        chol, x, info = _dposv(lam_inv, rhs, 0, 1)  # positional: lower=0, overwrite_a=1
         if info == 0 and not check:
             return x
         if info == 0:

@@ -166,7 +166,7 @@ class MomentumObserver:
 
     def _joint_to_wrench(self, J: np.ndarray) -> None:
         """ŵ = (J Jᵀ)⁻¹ J τ̂_ext, the least-squares wrench with Jᵀŵ ≈ τ̂_ext."""
-        _, x, info = _dposv(J.dot(J.T).T, J.dot(self.tau_ext), overwrite_a=1, overwrite_b=1)
+        _, x, info = _dposv(J.dot(J.T).T, J.dot(self.tau_ext), 0, 1, 1)  # lower=0, overwrite a, b
         if info == 0:
             self.wrench[:] = x
         else:  # singular J Jᵀ: the minimum-norm least-squares wrench

@@ -98,11 +98,8 @@ from compliant_docking.control.base import Controller, TaskInertia
 # so that one evaluation of the coefficients serves both log6 and dexp⁻ᵀ.
 from compliant_docking.control.lie import (
     PI_MARGIN,
-    TAYLOR_THETA_0,
-    coef0,
-    coef1,
+    inv_coefficients,
     log3_list,
-    trig_terms,
 )
 from compliant_docking.control.shaping import inertia_floor
 from compliant_docking.planning.base import Reference
@@ -270,9 +267,7 @@ class SE3LieController(Controller):
                     f"rad about one axis to {th:.6g} rad about the opposite one): the SE(3) "
                     f"impedance requires |λ_rot| < π (the pose-error logarithm is not unique at π)")
         self._w_prev = (w0, w1, w2)
-        x = th * th
-        trig = trig_terms(th) if th >= TAYLOR_THETA_0 else (0.0, 0.0, 0.0)
-        _, _, _, g, e = coef0(th, x, *trig)
+        g, e, dg, de = inv_coefficients(th)  # J(w)⁻¹'s coefficients g, e and g1, e1
         wp = w0 * e0 + w1 * e1 + w2 * e2
         l0 = g * e0 - 0.5 * (w1 * e2 - w2 * e1) + e * wp * w0
         l1 = g * e1 - 0.5 * (w2 * e0 - w0 * e2) + e * wp * w1
@@ -327,7 +322,6 @@ class SE3LieController(Controller):
             # --- V̇_ref = Ad(T̃)V̇_d + ad(Ṽ)V − A⁻¹(F̃ − D·Ṽ − dexp⁻ᵀKλ)
             # dexp⁻ᵀy = [J⁻ᵀy_v; Qiᵀy_v + J⁻ᵀy_w] with J⁻ᵀy = g y + ½ w×y + e w(w·y) and
             # Qiᵀy = g1 s y + ½ λ_v×y + e(λ_v(w·y) + w(λ_v·y)) + e1 s w(w·y), s = w·λ_v
-            _, _, _, g1, e1 = coef1(th, x, *trig)
             kd = self._K_diag
             if kd is None:
                 y0, y1, y2, y3, y4, y5 = self.K.dot(lam).tolist()
@@ -340,8 +334,8 @@ class SE3LieController(Controller):
             wz = w0 * y3 + w1 * y4 + w2 * y5
             ewy = e * wy
             ewz = e * wz
-            qs = g1 * s
-            qw = e * ly + e1 * s * wy
+            qs = dg * s  # g1 s
+            qw = e * ly + de * s * wy  # e λ_v·y + e1 s w·y
             # r = F̃ − dexp⁻ᵀKλ
             r0 = F_tilde[0] - (g * y0 + 0.5 * (w1 * y2 - w2 * y1) + ewy * w0)
             r1 = F_tilde[1] - (g * y1 + 0.5 * (w2 * y0 - w0 * y2) + ewy * w1)

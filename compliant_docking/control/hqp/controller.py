@@ -51,7 +51,7 @@ from compliant_docking.control.hqp.compliance import (
     modal_damping,
     stiffness_scale,
 )
-from compliant_docking.control.hqp.manipulability import manipulability_gradient
+from compliant_docking.control.hqp.manipulability import ManipulabilityGradient, check_revolute_chain
 from compliant_docking.control.hqp.qp_level import QPLevel
 from compliant_docking.control.observer import MomentumObserver
 from compliant_docking.planning.base import Reference
@@ -106,7 +106,7 @@ class HQPController(Controller):
         arm = self.arm
         n = arm.nv
         self.n = n
-        self._check_revolute_chain()
+        check_revolute_chain(arm.model)
         self.K0 = vector_setting(K0, 6, "K0", minimum=0.0)
         if not 0.0 < K_min_ratio <= 1.0:
             raise ValueError(f"controller.K_min_ratio must be in (0, 1], got {K_min_ratio}")
@@ -151,6 +151,10 @@ class HQPController(Controller):
         self._z_twist, self._z_pos, self._z_rot = self._z[:6], self._z[6:9], self._z[9:]
         self._a_null = np.zeros(n)
         self._Na = np.zeros(n)
+        self._gradient = ManipulabilityGradient(n)
+        self._Z_rows = 2 * 3 * n  # entries of Z (both candidates)
+        self._F_last: float | None = None  # the contact magnitude s, √s and K_r were made for
+        self._s = self._sqrt_s = 1.0
 
         # per-run statistics and per-step records
         self.steps = 0
@@ -164,15 +168,6 @@ class HQPController(Controller):
         self._rec = np.zeros((n_steps, 4))  # F, K_r scale s, preload, manipulability w
         self._rec_len = n_steps
         self._fast_steps = 0  # both closed forms met every row
-
-    def _check_revolute_chain(self) -> None:
-        kinds = {j.shortname() for j in self.arm.model.joints[1:]}
-        revolute = {"JointModelRX", "JointModelRY", "JointModelRZ", "JointModelRevoluteUnaligned"}
-        if not kinds <= revolute or self.arm.model.nq != self.arm.nv:
-            raise ValueError(
-                f"controller=hqp needs a serial arm of revolute joints "
-                f"(manipulability gradient); got joints {sorted(kinds)}"
-            )
 
     def _init_constraints(self, context: ControlContext, dt_p: float, eps_abs: float) -> None:
         """Constant parts of the 21 constraint rows, and the two QP levels.
@@ -236,13 +231,18 @@ class HQPController(Controller):
         # contact magnitude F, stiffness K_r = s·K0, preload p
         w_ext = wrench if self.observer is None else self.observer.update(state, wrench)
         F = max(math.sqrt(w_ext.dot(w_ext)) - self.deadband, 0.0) if self.use_force_feedback else 0.0
-        s = stiffness_scale(F, self.min_stiffness_ratio, self.sigmoid_gain)
+        if F != self._F_last:  # s, √s and K_r = s·K0 change only with F (constant in free space)
+            self._F_last = F
+            self._s = s = stiffness_scale(F, self.min_stiffness_ratio, self.sigmoid_gain)
+            self._sqrt_s = math.sqrt(s)
+            np.multiply(self.K0, s, out=self._K_diag)
+        s = self._s
         preload = self.preload.update(F)
 
         # Λ⁻¹ = J M⁻¹ Jᵀ; Λ^½ and Λ from its eigendecomposition; D_r into its buffer
         JMinv = J.dot(Minv)
         lam_inv = JMinv.dot(J.T)
-        lam = self._task_inertia(lam_inv, s)
+        lam = self._task_inertia(lam_inv)
 
         # F_r = [D_r, K_r]·[ν_d − ν; x_d − x; −log3(R R_dᵀ)] + F_pre, b = ν̇_d − J̇v + Λ⁻¹F_r
         z = self._z
@@ -291,7 +291,8 @@ class HQPController(Controller):
             Z[:, 2 * n :] += ff
             hhat += ff
         within = np.abs(Z) <= self._half
-        if within.all() and not self.solve_every_step:
+        # count_nonzero: a fraction of the cost of ndarray.all() on an array this small
+        if np.count_nonzero(within) == self._Z_rows and not self.solve_every_step:
             self._fast_steps += 1
             tau = Z[1, 2 * n :]  # M(q̈ + N a) + ĥ (a fresh array)
         else:
@@ -301,14 +302,13 @@ class HQPController(Controller):
             self.observer.command(tau)
         k = self.steps
         if k < self._rec_len:
-            rec = self._rec[k]
-            rec[0], rec[1], rec[2], rec[3] = F, s, preload, w
+            self._rec[k] = (F, s, preload, w)
         self.steps = k + 1
         return tau
 
-    def _task_inertia(self, lam_inv: np.ndarray, s: float) -> np.ndarray:
+    def _task_inertia(self, lam_inv: np.ndarray) -> np.ndarray:
         """Λ from Λ⁻¹ = V diag(λ) Vᵀ (λ floored at λ_max/condition_threshold); writes
-        D_r and K_r = s·K0 into the buffer [D_r, K_r]. Returns Λ.
+        D_r into the buffer [D_r, K_r] (compute() keeps K_r = s·K0 there). Returns Λ.
 
         D_r = Λ^½K_r^½ + K_r^½Λ^½ has entries (Λ^½)_ij (k_i + k_j), k = √s·√K0, so
         D_r = √s·(Λ^½ ∘ P) with the constant P_ij = √K0_i + √K0_j.
@@ -327,8 +327,7 @@ class HQPController(Controller):
         if _dpotrf(D.T)[1] != 0:  # not positive definite: damp each mode critically instead
             self.modal_damping_steps += 1
             D[:] = modal_damping(lam_sqrt, (V * root).dot(V.T), self.K0)
-        D *= math.sqrt(s)
-        np.multiply(self.K0, s, out=self._K_diag)
+        D *= self._sqrt_s
         return Vs.dot(Vs.T)
 
     def _floor(self, eigval: np.ndarray) -> None:
@@ -345,7 +344,7 @@ class HQPController(Controller):
         a_null -= self.posture_damping * v
         if w < self.manipulability_threshold and chol is not None and self.singularity_weight > 0.0:
             self.singularity_steps += 1
-            direction = manipulability_gradient(J, _dpotrs(chol, J)[0], 1.0)  # ∇w/w
+            direction = self._gradient(J, _dpotrs(chol, J)[0])  # ∇w/w
             if self._inertia_metric:
                 direction = Minv.dot(direction)
             norm = math.sqrt(direction.dot(direction))

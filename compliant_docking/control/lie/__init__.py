@@ -45,6 +45,7 @@ from compliant_docking.control.lie.series import (
                                                coef1,
                                                coef2,
                                                coefficients,
+                                               inv_coefficients,
                                                trig_terms,
 )
 from compliant_docking.control.lie.so3 import (
@@ -70,5 +71,6 @@ __all__ = [
     "coef1",
     "coef2",
     "coefficients",
+    "inv_coefficients",
     "log3_list",
 ]

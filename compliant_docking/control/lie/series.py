@@ -129,6 +129,29 @@ def coef1(t, x, s, co, omc):
     return a1, b1, c1, g1, e1
 
 
+def inv_coefficients(t):
+    """(g, e, g1, e1) at theta = t: the coefficients of J(w)^-1 and their order-1
+    derivatives, as :func:`coef0` and :func:`coef1` give them (the same expressions, bit
+    for bit; tests/control/test_lie.py), in one call: the SE(3) impedance's hot path needs
+    only these four, and the calls and the unused a, b, c (and a1, b1, c1) cost more than
+    its remaining arithmetic."""
+    x = t * t
+    if t < TAYLOR_THETA_0:  # both series
+        e = 1 / 12 + x * (1 / 720 + x * (1 / 30240 + x * (1 / 1209600 + x * (1 / 47900160))))
+        g = 1.0 - e * x
+    else:
+        h = _sin(0.5 * t)
+        s, omc = _sin(t), 2.0 * h * h
+        g = t * s / (2.0 * omc)
+        e = (1.0 - g) / x
+        if t >= TAYLOR_THETA_1:  # both closed forms
+            g1 = (s - t) / (2.0 * t * omc)
+            return g, e, g1, -(g1 + 2.0 * e) / x  # e: coef1's (1 − t s/(2 omc))/x, same bits
+    g1 = -1 / 6 + x * (-1 / 180 + x * (-1 / 5040 + x * (-1 / 151200 + x * (-1 / 4790016 + x * (-691 / 108972864000 + x * (-1 / 5337446400 + x * (-3617 / 666913927680000 + x * (-43867 / 283838567620608000))))))))  # noqa: E501
+    e1 = 1 / 360 + x * (1 / 7560 + x * (1 / 201600 + x * (1 / 5987520 + x * (691 / 130767436800 + x * (1 / 6227020800 + x * (3617 / 762187345920000 + x * (43867 / 319318388573184000 + x * (174611 / 44603203483238400000))))))))  # noqa: E501
+    return g, e, g1, e1
+
+
 def coef2(t, x, s, co, omc):
     """Order-2 coefficients f2 = f1'(t)/t for f in (a, b, c).
 
