@@ -38,8 +38,13 @@ def parts(overrides: list[str], repeats: int, profile: int) -> dict[str, float]:
     n = sim.telemetry.count
     q, v, w = sim.telemetry.q[:n].copy(), sim.telemetry.v[:n].copy(), sim.telemetry.wrench[:n].copy()
     dt = sim.scene.model.opt.timestep
-    best = {"loop": sim.loop_wall_time / n * 1e6, "update": np.inf, "reference": np.inf,
-            "compute": np.inf, "physics": np.inf}
+    best = {
+        "loop": sim.loop_wall_time / n * 1e6,
+        "update": np.inf,
+        "reference": np.inf,
+        "compute": np.inf,
+        "physics": np.inf,
+    }
     for r in range(repeats):
         fresh = prepare(cfg)
         arm, ctrl = fresh.scene.arm, fresh.controller
@@ -92,12 +97,16 @@ def main() -> int:
         for controller in args.controllers:
             over = [f"robot={robot}", f"controller={controller}", "task.progress=false", *args.overrides]
             rows.append((robot, controller, parts(over, args.repeats + bool(args.cprofile), args.cprofile)))
-    print(f"{'robot':8} {'controller':11} {'loop':>7} {'update':>7} {'ref':>6} {'compute':>8} "
-          f"{'physics':>8} {'rest':>6}   (µs/step; rest = loop − the parts: logging, sensor, ctrl)")
+    print(
+        f"{'robot':8} {'controller':11} {'loop':>7} {'update':>7} {'ref':>6} {'compute':>8} "
+        f"{'physics':>8} {'rest':>6}   (µs/step; rest = loop − the parts: logging, sensor, ctrl)"
+    )
     for robot, controller, p in rows:
         rest = p["loop"] - p["update"] - p["reference"] - p["compute"] - p["physics"]
-        print(f"{robot:8} {controller:11} {p['loop']:7.1f} {p['update']:7.1f} {p['reference']:6.1f} "
-              f"{p['compute']:8.1f} {p['physics']:8.1f} {rest:6.1f}")
+        print(
+            f"{robot:8} {controller:11} {p['loop']:7.1f} {p['update']:7.1f} {p['reference']:6.1f} "
+            f"{p['compute']:8.1f} {p['physics']:8.1f} {rest:6.1f}"
+        )
     return 0
 
 

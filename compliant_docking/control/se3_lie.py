@@ -272,7 +272,13 @@ class SE3LieController(Controller):
         l0 = g * e0 - 0.5 * (w1 * e2 - w2 * e1) + e * wp * w0
         l1 = g * e1 - 0.5 * (w2 * e0 - w0 * e2) + e * wp * w1
         l2 = g * e2 - 0.5 * (w0 * e1 - w1 * e0) + e * wp * w2
-        lam = _fromiter((l0, l1, l2, w0, w1, w2), _F64, 6)
+        k = self._k
+        if k < self._n_log:  # λ is written once, into its row of the record (a view)
+            lam = self._lam_log[k]
+            lam[:] = (l0, l1, l2, w0, w1, w2)
+        else:
+            lam = _fromiter((l0, l1, l2, w0, w1, w2), _F64, 6)
+        self._k = k + 1
 
         # --- Ad(T̃)V_d and Ad(T̃)V̇_d: with T̃ = T⁻¹T_d these are the reference twist and
         # its derivative carried to the TCP, in its axes (rotations commute with ×):
@@ -381,11 +387,7 @@ class SE3LieController(Controller):
         if self.friction.active:
             tau += self.friction(tau, v, arm.h)
 
-        # --- bookkeeping (no copies beyond one row of the λ record)
-        k = self._k
-        if k < self._n_log:
-            self._lam_log[k] = lam
-        self._k = k + 1
+        # --- bookkeeping
         if th > self.max_rotation_error:
             self.max_rotation_error = th
         self.lam, self.V_tilde, self.F_tilde = lam, V_tilde, F_tilde

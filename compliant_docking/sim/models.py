@@ -19,6 +19,9 @@ import numpy as np
 import pinocchio as pin
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+# bound once: the per-step update looks them up as globals, not as module attributes
+_all_terms, _minverse = pin.computeAllTerms, pin.computeMinverse
+_frame_jacobian, _frame_acceleration = pin.getFrameJacobian, pin.getFrameClassicalAcceleration
 
 
 @dataclass(frozen=True)
@@ -86,14 +89,14 @@ class ArmModel:
     def update(self, q: np.ndarray, v: np.ndarray) -> None:
         """Kinematics and dynamics at (q, v): one computeAllTerms + M⁻¹ + TCP quantities."""
         model, data, fid = self.model, self.data, self.tcp_frame
-        pin.computeAllTerms(model, data, q, v)
-        pin.computeMinverse(model, data, q)
+        _all_terms(model, data, q, v)
+        _minverse(model, data, q)
         self.q, self.v = q, v
         # getFrameJacobian also refreshes the TCP placement oMf (hence pos and rot)
-        self.J = pin.getFrameJacobian(model, data, fid, _LWA)
+        self.J = _frame_jacobian(model, data, fid, _LWA)
         # computeAllTerms ran the forward pass with zero joint acceleration, so the
         # classical acceleration of the TCP is exactly J̇v.
-        self.Jdot_v = pin.getFrameClassicalAcceleration(model, data, fid, _LWA).vector
+        self.Jdot_v = _frame_acceleration(model, data, fid, _LWA).vector
         self.J.dot(v, out=self.twist)
 
     def tcp_placement(self, q: np.ndarray) -> pin.SE3:

@@ -140,6 +140,28 @@ def test_manipulability_gradient_matches_finite_differences(robot):
         np.testing.assert_allclose(grad, fd, atol=1e-7 + 1e-6 * np.abs(fd).max())
 
 
+def test_manipulability_gradient_matches_the_column_formula():
+    """The six-call evaluation against the formula written out with one cross product per
+    column pair, ∂w/∂q_i = w (Σ_{j≤i} v_i·(Gv_j × ω_j) + Σ_{j>i} ω_i·(v_j × Gv_j + ω_j × Gω_j)),
+    on random 6×7 and 6×9 matrices (the identity holds for any J, G): both sum the same
+    products in another order, so they agree to round-off (1e-13 relative)."""
+    rng = np.random.default_rng(5)
+    for n in (7, 7, 9):
+        J, G = rng.standard_normal((6, n)), rng.standard_normal((6, n))
+        v, om, Gv, Gom = J[:3].T, J[3:].T, G[:3].T, G[3:].T
+        b = np.cross(Gv, om)
+        a = np.cross(v, Gv) + np.cross(om, Gom)
+        expected = np.array(
+            [
+                sum(v[i] @ b[j] for j in range(i + 1)) + sum(om[i] @ a[j] for j in range(i + 1, n))
+                for i in range(n)
+            ]
+        )
+        np.testing.assert_allclose(
+            manipulability_gradient(J, G, 2.0), 2.0 * expected, rtol=0, atol=1e-13 * np.abs(expected).max()
+        )
+
+
 def test_preload_ramps_up_in_contact_and_down_out_of_contact():
     ramp = PreloadRamp(target=5.0, ramp_s=1.5, dt=0.001)
     assert ramp.update(0.5) == 0.0  # below the 1 N contact threshold: stays off

@@ -458,3 +458,23 @@ def test_rotation_domain_check():
     # a custom margin
     with pytest.raises(ValueError):
         lie.check_rotation_domain(np.concatenate([np.zeros(3), 3.0 * n]), margin=0.2)
+
+
+def test_inv_coefficients_are_coef0_and_coef1_bit_for_bit():
+    """The SE(3) impedance's one-call (g, e, g1, e1) repeats coef0's and coef1's expressions:
+    equal to the last bit on both sides of both Taylor switches (0.1 and 0.5 rad), so the
+    controller's results do not depend on which of them it calls."""
+    rng = np.random.default_rng(6)
+    thetas = np.concatenate(
+        [
+            rng.uniform(0.0, 0.1, 500),
+            rng.uniform(0.1, 0.5, 500),
+            rng.uniform(0.5, 3.1, 500),
+            [0.0, 1e-9, 0.1, 0.5],
+        ]
+    )
+    for t in thetas.tolist():
+        x = t * t
+        trig = lie.trig_terms(t) if t >= lie.TAYLOR_THETA_0 else (0.0, 0.0, 0.0)
+        expected = lie.coef0(t, x, *trig)[3:] + lie.coef1(t, x, *trig)[3:]
+        assert lie.inv_coefficients(t) == expected, t

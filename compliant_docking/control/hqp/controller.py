@@ -268,7 +268,7 @@ class HQPController(Controller):
         if info == 0:
             w = math.prod(chol.diagonal().tolist())  # √det(J Jᵀ)
             if self._inertia_metric:  # M⁻¹Jᵀ(J M⁻¹Jᵀ + εI)⁻¹ b: minimises ‖Jq̈ − b‖² + ε q̈ᵀMq̈
-                np.dot(_dposv(lam_inv + self._reg6, b)[1], JMinv, out=X[0])
+                np.dot(_dposv(lam_inv + self._reg6, b, 0, 1)[1], JMinv, out=X[0])  # overwrite_a
             else:
                 np.dot(_dpotrs(chol, b)[0], J, out=X[0])
         else:

@@ -37,6 +37,8 @@ def check_revolute_chain(model) -> None:
             f"controller=hqp needs a serial arm of revolute joints "
             f"(manipulability gradient); got joints {sorted(kinds)}"
         )
+
+
 _ONES6 = np.ones(6)
 
 
