@@ -153,8 +153,7 @@ class HQPController(Controller):
         self._Na = np.zeros(n)
         self._gradient = ManipulabilityGradient(n)
         self._Z_rows = 2 * 3 * n  # entries of Z (both candidates)
-        self._F_last: float | None = None  # the contact magnitude s, √s and K_r were made for
-        self._s = self._sqrt_s = 1.0
+        self._s = self._sqrt_s = math.nan  # the s that √s and K_r were made for (none yet)
 
         # per-run statistics and per-step records
         self.steps = 0
@@ -231,12 +230,10 @@ class HQPController(Controller):
         # contact magnitude F, stiffness K_r = s·K0, preload p
         w_ext = wrench if self.observer is None else self.observer.update(state, wrench)
         F = max(math.sqrt(w_ext.dot(w_ext)) - self.deadband, 0.0) if self.use_force_feedback else 0.0
-        if F != self._F_last:  # s, √s and K_r = s·K0 change only with F (constant in free space)
-            self._F_last = F
-            self._s = s = stiffness_scale(F, self.min_stiffness_ratio, self.sigmoid_gain)
-            self._sqrt_s = math.sqrt(s)
+        s = stiffness_scale(F, self.min_stiffness_ratio, self.sigmoid_gain)
+        if s != self._s:  # √s and K_r = s·K0 follow s (constant while clamped at K_min in contact)
+            self._s, self._sqrt_s = s, math.sqrt(s)
             np.multiply(self.K0, s, out=self._K_diag)
-        s = self._s
         preload = self.preload.update(F)
 
         # Λ⁻¹ = J M⁻¹ Jᵀ; Λ^½ and Λ from its eigendecomposition; D_r into its buffer
