@@ -311,7 +311,8 @@ class HQPController(Controller):
         D_r = √s·(Λ^½ ∘ P) with the constant P_ij = √K0_i + √K0_j.
         """
         eigval, V, _ = _dsyevd(lam_inv)
-        top, low = eigval[-1], eigval[0]
+        values = eigval.tolist()  # Python floats: cheaper to compare than numpy scalars
+        top, low = values[-1], values[0]
         if low * self.lambda_max_condition < top:  # a new largest condition number
             self.lambda_max_condition = top / low if low > 0.0 else math.inf
         if low * self.threshold < top:  # also when low ≤ 0
