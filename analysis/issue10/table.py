@@ -63,9 +63,9 @@ def compare(before_dir, after_dir, trajectory="quintic"):
                 f"{r.steady_force_mean_N:.2f} ± {r.steady_force_std_N:.2f} | "
                 f"{r.steady_contact_events_per_s:.1f} | {r.first_contact_lateral_offset_m * 1e3:.2f}")
 
-    print("| robot | controller | gravity | before: strike / peak [N] | before: steady |F| [N] | "
+    print("| robot | controller | gravity | before: strike / peak [N] | before: steady force [N] | "
           "before: events/s | before: offset [mm] | before: docked (old gate; new gate) | "
-          "after: strike / peak [N] | after: steady |F| [N] | after: events/s | after: offset [mm] | after: docked |")
+          "after: strike / peak [N] | after: steady force [N] | after: events/s | after: offset [mm] | after: docked |")
     print("|---" * 13 + "|")
     for robot in ("iiwa14", "fr3"):
         for controller in ("impedance", "hqp", "se3_lie"):

@@ -83,8 +83,8 @@ METRICS: tuple[Metric, ...] = (
     Metric("first_strike_force_N", CONTACT_EVENTS, "first strike peak", "N", spec=".2f", interval=True),
     Metric("first_contact_lateral_offset_m", CONTACT_EVENTS, "offset at first contact", "mm", 1e3),
     Metric("first_contact_speed_m_s", CONTACT_EVENTS, "speed at first contact", "mm/s", 1e3, spec=".2f"),
-    Metric("steady_force_mean_N", CONTACT_EVENTS, "steady |F| mean", "N"),
-    Metric("steady_force_std_N", CONTACT_EVENTS, "steady |F| std", "N"),
+    Metric("steady_force_mean_N", CONTACT_EVENTS, "steady force mean", "N"),
+    Metric("steady_force_std_N", CONTACT_EVENTS, "steady force std", "N"),
     Metric("steady_contact_events_per_s", CONTACT_EVENTS, "steady make/break", "events/s", spec=".1f"),
     # internal safety (Table 10)
     Metric(

@@ -158,3 +158,12 @@ def test_failure_reasons_say_what_failed():
         "not docked: not seated: tip up to 10.2 mm from the seat over the steady window (tolerance 1 mm)"
     )
     assert docking_verdict(SEATED, _gate(), []) == "docked"
+
+
+def test_metric_labels_fit_in_a_markdown_table_and_a_figure():
+    """Labels go into summary.md's tables, where a "|" splits the cell, and onto axes, where
+    the style's serif font draws "|" like an "l" ("steady |F| mean" did both)."""
+    from compliant_docking.evaluation.registry import METRICS
+
+    bad = [m.label for m in METRICS if "|" in m.label or "$" in m.label]
+    assert not bad, f"labels with '|' or '$': {bad}"
