@@ -17,6 +17,10 @@ from compliant_docking.config import load_config
 make_cfg = load_config
 
 
+# the arm held still in free space at a reachable point (no socket): push and hold tests
+FREE_SPACE_HOLD = ("target=none", "trajectory=hold", "task.init_pos=[0.55,0.0,0.35]", "task.settle_time=0.0")
+
+
 def run_cli(*args: str, cwd: Path | None = None, timeout: float = 300) -> subprocess.CompletedProcess:
     """``python -m compliant_docking args…`` in a subprocess, from the repository root."""
     env = {**os.environ, "PYTHONUNBUFFERED": "1"}

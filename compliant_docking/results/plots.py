@@ -11,7 +11,7 @@ import numpy as np
 import pandas as pd
 
 from compliant_docking.results.tables import configuration_keys, configuration_labels
-from compliant_docking.viz.plotting import FORMATS, apply_style, check_formats
+from compliant_docking.viz.plotting import FORMATS, apply_style, save
 
 #: one font size for labels, ticks and legends of the comparison figures [pt]
 FONT = 7.0
@@ -39,17 +39,7 @@ def comparison_style():
 def save_figure(fig, out_dir: str | Path | None, stem: str, formats: Sequence[str] = FORMATS) -> list[Path]:
     """Save ``fig`` as ``out_dir/stem.<format>`` for each of ``formats`` (nothing when
     out_dir is None)."""
-    if out_dir is None:
-        return []
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    paths = []
-    for fmt in check_formats(formats):
-        path = out / f"{stem}.{fmt}"
-        fig.savefig(path)
-        paths.append(path)
-        fig.set_layout_engine("none")  # laid out once, by the first save (text layout is slow)
-    return paths
+    return [] if out_dir is None else save(fig, Path(out_dir), stem, formats)
 
 
 def note(fig, lines: Sequence[str]) -> None:

@@ -83,6 +83,7 @@ def save(fig, out_dir: Path, stem: str, formats: Sequence[str] = FORMATS) -> lis
         path = out_dir / f"{stem}.{fmt}"
         fig.savefig(path)
         paths.append(path)
+        fig.set_layout_engine("none")  # laid out once, by the first save (text layout is slow)
     return paths
 
 

@@ -6,7 +6,7 @@ import pytest
 
 from compliant_docking.control.integral import PositionIntegral
 from compliant_docking.sim.simulate import prepare
-from tests.helpers import make_cfg, push_at_tcp
+from tests.helpers import FREE_SPACE_HOLD, make_cfg, push_at_tcp
 
 AXIS = np.array([0.0, 0.0, -1.0])
 FREE = np.zeros(6)
@@ -65,10 +65,7 @@ def test_integral_action_removes_a_constant_disturbance(controller):
     for ki in (0.0, 100.0):
         sim = prepare(
             make_cfg(
-                "target=none",
-                "trajectory=hold",
-                "task.init_pos=[0.55,0.0,0.35]",
-                "task.settle_time=0.0",
+                *FREE_SPACE_HOLD,
                 "trajectory.duration=15",
                 f"controller={controller}",
                 f"controller.integral_gain={ki}",

@@ -7,7 +7,7 @@ import pytest
 
 from compliant_docking.control.shaping import ApparentInertiaFloor
 from compliant_docking.sim.simulate import prepare
-from tests.helpers import SHORT_CONTACT, calm, make_cfg, push_at_tcp, steady_contact
+from tests.helpers import FREE_SPACE_HOLD, SHORT_CONTACT, calm, make_cfg, push_at_tcp, steady_contact
 
 
 def _random_case(seed):
@@ -68,10 +68,7 @@ def test_floor_keeps_the_static_compliance():
     """K and D are untouched: with the floor active a constant push still settles at F/k."""
     sim = prepare(
         make_cfg(
-            "target=none",
-            "trajectory=hold",
-            "task.init_pos=[0.55,0.0,0.35]",
-            "task.settle_time=0.0",
+            *FREE_SPACE_HOLD,
             "trajectory.duration=10",
             "controller.m=2",
             "controller.m_rot=0.2",

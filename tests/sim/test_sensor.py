@@ -10,9 +10,8 @@ import pytest
 
 from compliant_docking.sim.sensor import wrench_reader
 from compliant_docking.sim.simulate import prepare
-from tests.helpers import make_cfg, push_at_tcp
+from tests.helpers import FREE_SPACE_HOLD, make_cfg, push_at_tcp
 
-FREE_SPACE = ("target=none", "trajectory=hold", "task.init_pos=[0.55,0.0,0.35]", "task.settle_time=0.0")
 #: plug pointing straight down (the default), and tilted 50° from it about the world y axis:
 #: then the tool's weight has a moment about the TCP (its centre of mass is 30 mm up the
 #: plug axis): 0.3 kg · 9.81 m/s² · 0.03 m · sin 50° = 0.068 N·m
@@ -56,7 +55,7 @@ def test_wrench_reader_returns_the_applied_wrench_at_the_tcp(physics, tilt):
     """The push comes back with the sign of a wrench ON the tool, the moment about the TCP
     and the tool's weight (force and moment) compensated; 1e-6: the static hold's residual."""
     tilted = () if tilt is None else (_quat_wxyz(tilt),)
-    sim = prepare(make_cfg(*FREE_SPACE, f"physics={physics}", *tilted))
+    sim = prepare(make_cfg(*FREE_SPACE_HOLD, f"physics={physics}", *tilted))
     if tilt is not None:  # the start pose really is tilted
         axis = sim.scene.arm.tcp_placement(sim.q0).rotation[:, 2]
         assert math.degrees(math.acos(-axis[2])) == pytest.approx(tilt, abs=1e-6)
@@ -70,7 +69,7 @@ def test_the_tilted_case_measures_the_weight_moment():
     """Without the payload compensation the tilted reading is off by the weight's moment
     about the TCP, m·g·|c − tcp|·sin(tilt) = 0.068 N·m, and its force m·g: so the test
     above would catch a wrong sign or a dropped term."""
-    sim = prepare(make_cfg(*FREE_SPACE, "physics=earth", _quat_wxyz(50.0)))
+    sim = prepare(make_cfg(*FREE_SPACE_HOLD, "physics=earth", _quat_wxyz(50.0)))
     tool = sim.scene.arm.tool
     out = _held_still(sim, np.zeros(3), np.zeros(3))
     assert np.allclose(out, 0.0, atol=1e-6)
