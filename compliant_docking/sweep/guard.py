@@ -30,7 +30,7 @@ checking that it can be written.
 
 **Orphaned workers.** In a joblib sweep the guard also starts a watchdog in every worker
 process (``on_job_start``): when the launching process is gone (killed with SIGKILL, its
-workers re-parented), the worker exits within :data:`WATCHDOG_PERIOD_S` instead of
+workers re-parented), the worker exits within ``sweep.watchdog.PERIOD_S`` instead of
 waiting for work that never comes (loky's idle timeout is 300 s).
 """
 
@@ -38,7 +38,6 @@ from __future__ import annotations
 
 import os
 import sys
-import threading
 from collections import defaultdict
 from pathlib import Path
 from typing import Any
@@ -46,8 +45,8 @@ from typing import Any
 from hydra.experimental.callback import Callback
 from omegaconf import DictConfig, OmegaConf, read_write
 
-#: how often a worker's watchdog looks at its parent process [s]
-WATCHDOG_PERIOD_S = 2.0
+from compliant_docking.sweep.watchdog import start_watchdog
+
 #: largest suffix tried for a taken directory name (``<name>_2`` … ``<name>_999``)
 MAX_SUFFIX = 999
 
@@ -98,7 +97,10 @@ class Guard(Callback):
     # -- a sweep
     def on_multirun_start(self, config: DictConfig, **kwargs: Any) -> None:
         from compliant_docking.sweep.launchers import is_submitit
+        from compliant_docking.sweep.pool import start_early
+        from compliant_docking.sweep.workers import stop_early
 
+        workers_started = start_early(config.hydra.launcher)  # they import while the jobs are checked
         problems: list[str] = []
         jobs = check_jobs(config, problems)
         composed_for = str(config.hydra.sweep.dir)
@@ -107,6 +109,8 @@ class Guard(Callback):
             if problem:
                 problems.append(problem)
         if problems:
+            if workers_started:
+                stop_early()
             raise refuse("the sweep is refused", problems)
         if jobs and str(config.hydra.sweep.dir) == composed_for:  # else compose again: new directory
             _Composed.attach(config, jobs)
@@ -296,30 +300,3 @@ def _quoted(path: str) -> str:
         return _override_value(path)
     except ResumeError:
         return path
-
-
-# --------------------------------------------------------------------------- orphan workers
-_watchdog: threading.Thread | None = None
-
-
-def start_watchdog(period_s: float = WATCHDOG_PERIOD_S) -> None:
-    """Exit this process when its parent is gone (once per process; a daemon thread).
-
-    The parent is the launching process of a joblib sweep; when it dies the kernel
-    re-parents its children, so ``os.getppid()`` changes. The worker then exits at once
-    (``os._exit``): a job it was running is left without ``metrics.json``, like any job
-    of a killed sweep, and ``resume=`` reruns it.
-    """
-    global _watchdog
-    if _watchdog is not None and _watchdog.is_alive():
-        return
-    parent = os.getppid()
-
-    def watch() -> None:
-        while True:
-            threading.Event().wait(period_s)
-            if os.getppid() != parent:
-                os._exit(1)
-
-    _watchdog = threading.Thread(target=watch, name="orphan-watchdog", daemon=True)
-    _watchdog.start()

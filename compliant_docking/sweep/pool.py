@@ -134,6 +134,17 @@ class PoolLauncher(Launcher):
                 loader.load_sweep_config = keeping
 
 
+def start_early(launcher_config: Any) -> bool:
+    """Start the pool's workers now, when ``launcher_config`` (``hydra.launcher``) is this
+    launcher: the guard calls it before it composes and checks every job's config, which
+    happens before Hydra sets the launcher up (a 180-job preset composes for ~3 s). The
+    launcher's set-up then finds the same running executor. Returns whether it started them."""
+    if not str(launcher_config.get("_target_", "")).endswith(".PoolLauncher"):
+        return False
+    PoolLauncher(**{k: v for k, v in launcher_config.items() if k != "_target_"})._start_workers()
+    return True
+
+
 def execute_job(idx: int, sweep_config, hydra_context, task_function, singleton_state) -> JobReturn:
     """Hydra's joblib ``execute_job`` for a config composed already: run job ``idx``."""
     from hydra.core.hydra_config import HydraConfig
@@ -158,8 +169,8 @@ def execute_job(idx: int, sweep_config, hydra_context, task_function, singleton_
 
 def _import_job_libraries() -> None:
     """In a new worker: import what every job needs, before the first job arrives; and
-    watch the launching process (a worker whose parent died exits: sweep/guard.py)."""
-    from compliant_docking.sweep.guard import start_watchdog
+    watch the launching process (a worker whose parent died exits: sweep/watchdog.py)."""
+    from compliant_docking.sweep.watchdog import start_watchdog
 
     start_watchdog()
     import hydra.core.utils  # noqa: F401  (Hydra's run_job)

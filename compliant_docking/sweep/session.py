@@ -109,6 +109,9 @@ class SweepSession:
     ) -> SweepOutcome:
         """Summarise the sweep (files, console counts) and keep its outcome (``strict``:
         a failed job makes the exit status 1)."""
+        from compliant_docking.sweep.workers import release_workers
+
+        release_workers()  # every job has returned: the idle workers exit while this summarises
         self.stop_watcher()
         self._join_preload()
         remove_count(Path(sweep_dir))
