@@ -183,11 +183,11 @@ class SE3LieController(Controller):
                         if diagonal[0] and diagonal[1] else None)
         # the deviation from §3 that keeps the delayed force feedback stable (None: off, or
         # no force feedback: no such loop; docs/controllers/se3_lie.md): A_eff ⪰ ratio·Λ_b,
-        # applied to A⁻¹(…) in V̇_ref
+        # applied to A⁻¹(…) in V̇_ref; its [P, I] (refreshed in place) for the diagonal path
         if apparent_inertia_floor is not None and self.use_force_feedback and not diagonal[0]:
             raise ValueError("controller.apparent_inertia_floor needs a diagonal A (or null: off)")
-        self.inertia_floor = inertia_floor(np.diag(self.A), apparent_inertia_floor,
-                                           self.use_force_feedback)
+        floor = inertia_floor(np.diag(self.A), apparent_inertia_floor, self.use_force_feedback)
+        self.inertia_floor, self._P_and_I = floor, floor.P_and_I if floor is not None else np.zeros((6, 12))
 
         nv = self.arm.nv
         # World vectors, one per row, turned into TCP-frame vectors by ONE product per step
@@ -324,6 +324,12 @@ class SE3LieController(Controller):
             F_tilde = (F_tilde[0] - i0, F_tilde[1] - i1, F_tilde[2] - i2, *F_tilde[3:])
         V_tilde = (t0, t1, t2, t3, t4, t5)
 
+        J, Jb, Rt = arm.J, self._Jb, arm.rot_T
+        Rt.dot(J[:3], out=self._Jb_lin)
+        Rt.dot(J[3:], out=self._Jb_ang)
+        JbMinv = Jb.dot(arm.Minv)
+        # body J_b, J_b M⁻¹ and the floor's P: A⁻¹(…) → A_eff⁻¹(…), a = base + P(a − base)
+        P = None if self.inertia_floor is None else self.inertia_floor.current(Jb, JbMinv)
         if self._twist:
             # --- V̇_ref = Ad(T̃)V̇_d + ad(Ṽ)V − A⁻¹(F̃ − D·Ṽ − dexp⁻ᵀKλ)
             # dexp⁻ᵀy = [J⁻ᵀy_v; Qiᵀy_v + J⁻ᵀy_w] with J⁻ᵀy = g y + ½ w×y + e w(w·y) and
@@ -361,22 +367,21 @@ class SE3LieController(Controller):
             else:  # A and D diagonal: G·[r; −Ṽ] row by row, G = [diag(1/a), diag(d/a)]
                 i0, i1, i2, i3, i4, i5, h0, h1, h2, h3, h4, h5 = gd
                 b0, b1, b2, b3, b4, b5 = base
-                a = _fromiter((b0 - i0 * r0 + h0 * t0, b1 - i1 * r1 + h1 * t1,
-                               b2 - i2 * r2 + h2 * t2, b3 - i3 * r3 + h3 * t3,
-                               b4 - i4 * r4 + h4 * t4, b5 - i5 * r5 + h5 * t5), _F64, 6)
+                if P is not None:  # floor active: a = base + P(a − base) = [P, I]·[a − base; base]
+                    a = self._P_and_I.dot(_fromiter((
+                        h0 * t0 - i0 * r0, h1 * t1 - i1 * r1, h2 * t2 - i2 * r2, h3 * t3 - i3 * r3,
+                        h4 * t4 - i4 * r4, h5 * t5 - i5 * r5, b0, b1, b2, b3, b4, b5), _F64, 12))
+                    P = None  # applied
+                else:
+                    a = _fromiter((b0 - i0 * r0 + h0 * t0, b1 - i1 * r1 + h1 * t1,
+                                   b2 - i2 * r2 + h2 * t2, b3 - i3 * r3 + h3 * t3,
+                                   b4 - i4 * r4 + h4 * t4, b5 - i5 * r5 + h5 * t5), _F64, 6)
         else:
             a = self._lambda_space(lam, V_tilde, F_tilde, base)
 
-        # --- redundancy resolution in body coordinates
-        J, Jb, Rt = arm.J, self._Jb, arm.rot_T
-        Rt.dot(J[:3], out=self._Jb_lin)
-        Rt.dot(J[3:], out=self._Jb_ang)
-        JbMinv = Jb.dot(arm.Minv)
-        if self.inertia_floor is not None:  # A⁻¹(…) → A_eff⁻¹(…): a = base + A_eff⁻¹A(a − base)
-            P = self.inertia_floor.current(Jb, JbMinv)
-            if P is not None:  # (inactive: a untouched, bit for bit)
-                base_v = _fromiter(base, _F64, 6)
-                a = base_v + P.dot(a - base_v)
+        if P is not None:  # (None: floor inactive, a untouched, or applied above)
+            base_v = _fromiter(base, _F64, 6)
+            a = base_v + P.dot(a - base_v)
         force = self.task_inertia.solve(Jb, JbMinv, a)  # Λ(V̇_ref − J̇_b v + bV)
         if self.use_force_feedback:
             force -= self._F_body

@@ -44,6 +44,8 @@ class ApparentInertiaFloor:
         self._scale = np.outer(self._w_sqrt, self._w_sqrt)
         self._shift = self.ratio * np.eye(len(W))
         self.P: np.ndarray | None = None  # W_eff⁻¹W, None while the floor is inactive
+        # [P, I] (6×12), refreshed with P: P·d + y in one product, [P, I]·[d; y]
+        self.P_and_I = np.hstack([np.zeros((len(W), len(W))), np.eye(len(W))])
         self._step = 0
         self.active_steps = 0
         self.max_ratio = 0.0  # largest σ = eig(W^-½ Λ W^-½) seen while active
@@ -61,6 +63,7 @@ class ApparentInertiaFloor:
         self.max_ratio = max(self.max_ratio, 1.0 / mu[0])
         c = np.minimum(mu * (1.0 / self.ratio), 1.0)  # min(1, (1/ratio)/σ)
         self.P = (self._w_isqrt[:, None] * V * c).dot(V.T * self._w_sqrt)
+        self.P_and_I[:, : len(c)] = self.P
 
     def current(self, J: np.ndarray, JMinv: np.ndarray) -> np.ndarray | None:
         """This step's P = W_eff⁻¹W given its J and J M⁻¹, or None while the floor is inactive
