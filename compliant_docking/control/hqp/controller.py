@@ -58,7 +58,7 @@ from compliant_docking.planning.base import Reference
 from compliant_docking.sim.context import ControlContext
 from compliant_docking.sim.models import ArmModel
 
-_dsyevd, _dpotrf, _dpotrs, _dposv = lapack.dsyevd, lapack.dpotrf, lapack.dpotrs, lapack.dposv
+_dsyev, _dpotrf, _dpotrs, _dposv = lapack.dsyev, lapack.dpotrf, lapack.dpotrs, lapack.dposv
 
 #: Tikhonov regulariser of the level-1 Hessian (CONTROL_LAWS.md §2)
 REGULARISER = 1e-8
@@ -127,6 +127,9 @@ class HQPController(Controller):
         self.posture_stiffness = float(k_ji) * vector_setting(K_ji, n, "K_ji", minimum=0.0)
         self.posture_damping = float(k_ji) * vector_setting(D_ji, n, "D_ji", minimum=0.0)
         self.q_home = np.asarray(context.q_home, dtype=float).copy()
+        # q̈_ji = K_ji(q_home − q) − D_ji v as one product [q, v, 1]·T_ji
+        kp, kd = self.posture_stiffness, self.posture_damping
+        self._T_ji = np.vstack([-np.diag(kp), -np.diag(kd), kp * self.q_home])
         self.axis = np.asarray(context.axis, dtype=float) / np.linalg.norm(context.axis)
         self.preload = PreloadRamp(preload_force, preload_ramp_s, context.dt)
         self.force_source = ForceSource(force_source)
@@ -271,14 +274,14 @@ class HQPController(Controller):
         else:
             w = 0.0
             X[0] = np.linalg.lstsq(J, b, rcond=None)[0]
-        a_null = self._null_task(J, Minv, q, v, w, chol if info == 0 else None)
+        self._Y_q[:] = q
+        self._Y_v[:] = v
+        a_null = self._null_task(J, Minv, w, chol if info == 0 else None)
         # final candidate q̈ + N a_null, N a = a − M⁻¹JᵀΛJ a
         np.subtract(a_null, lam.dot(J.dot(a_null)).dot(JMinv), out=self._Na)
         np.add(X[0], self._Na, out=X[1])
 
         # both candidates against every row at once: Z = [q̈, q, v, 1]·T
-        self._Y_q[:] = q
-        self._Y_v[:] = v
         self._T_M[:] = M
         hhat = self._hhat
         hhat[:] = arm.h
@@ -310,7 +313,7 @@ class HQPController(Controller):
         D_r = Λ^½K_r^½ + K_r^½Λ^½ has entries (Λ^½)_ij (k_i + k_j), k = √s·√K0, so
         D_r = √s·(Λ^½ ∘ P) with the constant P_ij = √K0_i + √K0_j.
         """
-        eigval, V, _ = _dsyevd(lam_inv)
+        eigval, V, _ = _dsyev(lam_inv)
         values = eigval.tolist()  # Python floats: cheaper to compare than numpy scalars
         top, low = values[-1], values[0]
         if low * self.lambda_max_condition < top:  # a new largest condition number
@@ -334,12 +337,10 @@ class HQPController(Controller):
         self.lambda_floor_steps += 1
         np.maximum(eigval, max(top, 1e-300) / self.threshold, out=eigval)
 
-    def _null_task(self, J, Minv, q, v, w: float, chol) -> np.ndarray:
-        """a_null = k_sa q̈_sa + k_ji q̈_ji (Eq. 38-42)."""
+    def _null_task(self, J, Minv, w: float, chol) -> np.ndarray:
+        """a_null = k_sa q̈_sa + k_ji q̈_ji (Eq. 38-42); q and v are in ``_Y`` already."""
         a_null = self._a_null
-        np.subtract(self.q_home, q, out=a_null)
-        a_null *= self.posture_stiffness
-        a_null -= self.posture_damping * v
+        np.dot(self._Y[0, self.n :], self._T_ji, out=a_null)  # k_ji q̈_ji
         if w < self.manipulability_threshold and chol is not None and self.singularity_weight > 0.0:
             self.singularity_steps += 1
             direction = self._gradient(J, _dpotrs(chol, J)[0])  # ∇w/w
