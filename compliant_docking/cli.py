@@ -19,6 +19,8 @@ the typed schemas, which are not choices).
 from __future__ import annotations
 
 import contextlib
+import logging
+import os
 import re
 import signal
 import sys
@@ -115,7 +117,15 @@ def main(argv: list[str] | None = None) -> int:
     Hydra's shell completion (``-sc install=bash``) registers the completion for the
     program's file name, so it works with the console script, not with ``python -m``.
     """
-    return CommandLine().run(sys.argv[1:] if argv is None else list(argv))
+    status = CommandLine().run(sys.argv[1:] if argv is None else list(argv))
+    from compliant_docking.sweep.pool import abandoned_threads
+
+    if abandoned_threads():  # an aborted sweep: loky's threads may never finish (sweep/pool.py)
+        sys.stdout.flush()
+        sys.stderr.flush()
+        logging.shutdown()
+        os._exit(status)
+    return status
 
 
 def _terminated(signum, frame) -> None:

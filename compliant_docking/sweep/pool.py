@@ -127,11 +127,38 @@ class PoolLauncher(Launcher):
             ]
             return [future.result() for future in futures]
         except BaseException:  # a dead worker, Ctrl-C, SIGTERM: stop the others before going on
-            executor.shutdown(wait=True, kill_workers=True)
+            _kill_workers(executor)
             raise
         finally:  # every job has been sent: keep the checked configs of a next batch (a tuning study)
             if keeping is not None:
                 loader.load_sweep_config = keeping
+
+
+#: whether this process left loky's threads behind (see :func:`_kill_workers`); the command
+#: line then ends the process without joining them (``cli.main``)
+_abandoned_threads = False
+
+
+def _kill_workers(executor) -> None:
+    """Kill every worker at once (SIGKILL) and let the executor go without joining its
+    threads. A worker killed while it wrote a result (a SIGTERM or Ctrl-C to the process
+    group reaches the workers too) leaves half a message in the result pipe; loky's
+    manager thread then waits for the rest forever, and ``shutdown(wait=True)`` with it
+    (seen: a SIGTERM'd sweep that never exited)."""
+    global _abandoned_threads
+    for process in list(getattr(executor, "_processes", {}).values()):
+        try:
+            process.kill()
+            process.join(timeout=5)
+        except Exception:  # already gone
+            pass
+    executor.shutdown(wait=False, kill_workers=True)
+    _abandoned_threads = True
+
+
+def abandoned_threads() -> bool:
+    """Whether a sweep in this process was aborted and left loky's threads behind."""
+    return _abandoned_threads
 
 
 def start_early(launcher_config: Any) -> bool:

@@ -11,6 +11,7 @@ This module is imported by the launching process and every job: keep it light.
 from __future__ import annotations
 
 import os
+import sys
 import threading
 from pathlib import Path
 
@@ -25,8 +26,11 @@ COUNT_WIDTH = 20
 
 
 def emit(text: str) -> None:
-    """Print one line of sweep output, flushed at once (workers share the console)."""
-    print(text, flush=True)
+    """Print one line of sweep output, flushed at once, in one write: the workers share
+    the console, and ``print`` writes the text and its newline separately, so two jobs
+    finishing together could join their lines into one."""
+    sys.stdout.write(text + "\n")
+    sys.stdout.flush()
 
 
 def display(path: Path) -> str:

@@ -160,10 +160,10 @@ class MlflowCallback(Callback):
         """When the sweep is summarised: its files, counts and status on the parent run."""
         if self.parent_run_id is None:
             return
-        from mlflow.entities import Metric
-
         try:
-            client = self.client()
+            client = self.client()  # first: says how to install MLflow when it is missing
+            from mlflow.entities import Metric
+
             sweep_dir = Path(outcome.sweep_dir)
             for name in SWEEP_FILES:
                 if (sweep_dir / name).is_file():
@@ -203,9 +203,9 @@ class MlflowCallback(Callback):
 
     def log_job(self, out_dir: Path, cfg: dict) -> str:
         """Log one finished job directory as a run (a child of the sweep's); its id."""
+        client = self.client()  # first: says how to install MLflow when it is missing
         from mlflow.entities import Metric, Param, RunTag
 
-        client = self.client()
         experiment_id = self.experiment_id(client)
         record, problem = rundir.read_metrics(out_dir)
         record = record or {"status": "failed", "error": problem}
