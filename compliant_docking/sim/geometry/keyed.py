@@ -35,11 +35,10 @@ from compliant_docking.sim.geometry.collision import (
     PLUG_RGBA,
     SHAFT_CONAFFINITY,
     TIP_CONAFFINITY,
-    VISUAL_GROUP,
     apply_contact,
 )
 from compliant_docking.sim.geometry.fragment import Key, declare_key
-from compliant_docking.sim.geometry.plug import stacked_inertia
+from compliant_docking.sim.geometry.plug import add_visual_and_sites, dock_body, stacked_inertia
 from compliant_docking.sim.geometry.socket import Box, box_socket_spec, cavity_boxes
 
 
@@ -96,13 +95,7 @@ def build_keyed_plug(geom: KeyedPlugGeometry, contact: ContactParams | None) -> 
     MuJoCo's defaults; against the socket its higher-priority values apply)."""
     spec = mujoco.MjSpec()
     spec.modelname = "keyed_plug"
-    body = spec.worldbody.add_body(name="dock")
-    mass, com, inertia = keyed_plug_inertia(geom)
-    body.explicitinertial = True
-    body.mass = mass
-    body.ipos = com.tolist()
-    body.iquat = [1.0, 0.0, 0.0, 0.0]
-    body.inertia = inertia.tolist()
+    body = dock_body(spec, *keyed_plug_inertia(geom))
 
     n, z_edge = geom.sides, geom.chamfer_start
     parts = (
@@ -122,19 +115,7 @@ def build_keyed_plug(geom: KeyedPlugGeometry, contact: ContactParams | None) -> 
             rgba=list(PLUG_RGBA),
         )
         apply_contact(g, contact, 0, conaffinity)
-    spec.add_mesh(name="plug_visual", uservert=keyed_plug_vertices(geom).ravel().tolist())
-    body.add_geom(
-        name="plug_visual",
-        type=mujoco.mjtGeom.mjGEOM_MESH,
-        meshname="plug_visual",
-        contype=0,
-        conaffinity=0,
-        density=0.0,
-        group=VISUAL_GROUP,
-        rgba=list(PLUG_RGBA),
-    )
-    body.add_site(name="sensor_site", pos=[0.0, 0.0, 0.0], quat=[1.0, 0.0, 0.0, 0.0])
-    body.add_site(name="tcp", pos=[0.0, 0.0, geom.length])
+    add_visual_and_sites(spec, body, keyed_plug_vertices(geom), geom.length)
     declare_key(spec, _plug_key(geom))
     return spec
 

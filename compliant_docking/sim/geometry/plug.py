@@ -182,17 +182,30 @@ def build_plug(
         )
     spec = mujoco.MjSpec()
     spec.modelname = "plug"
+    body = dock_body(spec, *plug_inertia(geom))
+
+    _add_plug_collision(spec, body, geom, contact, collision)
+    segments = max(VISUAL_SEGMENTS, geom.tip_segments)
+    add_visual_and_sites(spec, body, plug_hull_vertices(geom, 0.0, segments), geom.length)
+    return spec
+
+
+def dock_body(spec: mujoco.MjSpec, mass: float, com: np.ndarray, inertia: np.ndarray):
+    """The tool fragment's root body ``dock`` with its explicit inertia (mass [kg], centre
+    of mass and diagonal inertia [kg·m²] in the body frame)."""
     body = spec.worldbody.add_body(name="dock")
-    mass, com, inertia = plug_inertia(geom)
     body.explicitinertial = True
     body.mass = mass
     body.ipos = com.tolist()
     body.iquat = [1.0, 0.0, 0.0, 0.0]
     body.inertia = inertia.tolist()
+    return body
 
-    _add_plug_collision(spec, body, geom, contact, collision)
-    segments = max(VISUAL_SEGMENTS, geom.tip_segments)
-    spec.add_mesh(name="plug_visual", uservert=plug_hull_vertices(geom, 0.0, segments).ravel().tolist())
+
+def add_visual_and_sites(spec: mujoco.MjSpec, body, vertices: np.ndarray, length: float) -> None:
+    """A plug's visual mesh (no contact, no mass) and its ``sensor_site`` (the mounting
+    face) and ``tcp`` (the tip, ``length`` along +z)."""
+    spec.add_mesh(name="plug_visual", uservert=vertices.ravel().tolist())
     body.add_geom(
         name="plug_visual",
         type=mujoco.mjtGeom.mjGEOM_MESH,
@@ -204,5 +217,4 @@ def build_plug(
         rgba=list(PLUG_RGBA),
     )
     body.add_site(name="sensor_site", pos=[0.0, 0.0, 0.0], quat=[1.0, 0.0, 0.0, 0.0])
-    body.add_site(name="tcp", pos=[0.0, 0.0, geom.length])
-    return spec
+    body.add_site(name="tcp", pos=[0.0, 0.0, length])
