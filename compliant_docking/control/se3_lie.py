@@ -43,15 +43,15 @@ Two evaluations of (2), equal up to round-off (tests/test_se3_lie.py checks it):
 
 * ``formulation=lambda_space``: literally as above. dexp, dexp⁻¹ (closed form) and
   ḋexp come from ``lie.dexp_inv`` / ``lie.dexp_all``; the gain matrices are never
-  formed: λ̈_ref = dexp⁻¹[A⁻¹(dexp⁻ᵀ(γ − Kλ) − D·dexp·λ̇) − ḋexp·λ̇]. About 67 µs per
-  control step in the loop (15× real time, default docking run).
+  formed: λ̈_ref = dexp⁻¹[A⁻¹(dexp⁻ᵀ(γ − Kλ) − D·dexp·λ̇) − ḋexp·λ̇]. Numpy throughout.
 * ``formulation=twist`` (default): substituting λ̈_ref into (2), dexp·dexp⁻¹ = I and
   the two ḋexp·λ̇ terms cancel exactly, leaving
 
       V̇_ref = Ad(T̃)V̇_d + ad(Ṽ)V − A⁻¹(F̃ − D·Ṽ − dexp(λ)⁻ᵀ·K·λ),
 
   which needs only dexp⁻ᵀ applied to one vector (closed form, the coefficients of
-  λ's own log): the same law at ~42 µs per step (24× real time).
+  λ's own log). With diagonal A, D, K (the config's case) the step runs compiled, one
+  kernel call (:mod:`~.se3_kernel`; speed: docs/controllers/se3_lie.md); else in numpy.
 
 A is constant: A⁻¹ enters only through G = A⁻¹[I, D], obtained once at construction
 by a Cholesky solve. The time-varying matrices are never inverted numerically (dexp⁻¹ is
@@ -92,15 +92,13 @@ from scipy.linalg import cho_factor, cho_solve
 
 from compliant_docking.config import SE3Formulation as Formulation
 from compliant_docking.control import lie
+from compliant_docking.control import se3_kernel as kern
 from compliant_docking.control.base import Controller, TaskInertia
 
 # lie.py's scalar kernels (log3 and the Taylor/closed-form coefficients), called directly
 # so that one evaluation of the coefficients serves both log6 and dexp⁻ᵀ.
-from compliant_docking.control.lie import (
-    PI_MARGIN,
-    inv_coefficients,
-    log3_list,
-)
+from compliant_docking.control.lie import PI_MARGIN, inv_coefficients, log3_list
+from compliant_docking.control.se3_kernel import TwistKernel
 from compliant_docking.control.shaping import inertia_floor
 from compliant_docking.planning.base import Reference
 from compliant_docking.sim.context import ControlContext
@@ -176,18 +174,17 @@ class SE3LieController(Controller):
         # G = A⁻¹[I, D] (one Cholesky solve, here): A⁻¹(x − D y) = G·[x; −y]
         self.G = np.ascontiguousarray(cho_solve(self._A_chol, np.hstack([np.eye(6), self.D])))
         self._twist = self.formulation is Formulation.twist
-        # diagonal fast paths (the config's case): Kλ and G·z element by element
+        # diagonal A, D, K (the config's case): the compiled step, element by element
         diagonal = [not np.any(m - np.diag(np.diag(m))) for m in (self.A, self.D, self.K)]
         self._K_diag = np.diag(self.K).tolist() if diagonal[2] else None
         self._G_diag = (np.diag(self.G[:, :6]).tolist() + np.diag(self.G[:, 6:]).tolist()
                         if diagonal[0] and diagonal[1] else None)
         # the deviation from §3 that keeps the delayed force feedback stable (None: off, or
         # no force feedback: no such loop; docs/controllers/se3_lie.md): A_eff ⪰ ratio·Λ_b,
-        # applied to A⁻¹(…) in V̇_ref; its [P, I] (refreshed in place) for the diagonal path
+        # applied to A⁻¹(…) in V̇_ref
         if apparent_inertia_floor is not None and self.use_force_feedback and not diagonal[0]:
             raise ValueError("controller.apparent_inertia_floor needs a diagonal A (or null: off)")
-        floor = inertia_floor(np.diag(self.A), apparent_inertia_floor, self.use_force_feedback)
-        self.inertia_floor, self._P_and_I = floor, floor.P_and_I if floor is not None else np.zeros((6, 12))
+        self.inertia_floor = inertia_floor(np.diag(self.A), apparent_inertia_floor, self.use_force_feedback)
 
         nv = self.arm.nv
         # World vectors, one per row, turned into TCP-frame vectors by ONE product per step
@@ -209,25 +206,25 @@ class SE3LieController(Controller):
         self._z = np.zeros(12)  # [dexp⁻ᵀ(γ − Kλ); −dexp·λ̇] for G (lambda_space)
         self._Jb = np.zeros((6, nv))
         self._Jb_lin, self._Jb_ang = self._Jb[:3], self._Jb[3:]
-        self._has_F_d = bool(np.any(F_d))
-        self._F_d = F_d.tolist()
-        self.max_rotation_error = 0.0
+        self._has_F_d, self._F_d = bool(np.any(F_d)), F_d.tolist()
+        self._max_rot = 0.0
         self._w_prev = (0.0, 0.0, 0.0)  # λ_rot of the previous step
         # per-step record of λ (exponential coordinates of the pose error)
         self._lam_log = np.zeros((max(int(context.n_steps), 0), 6))
         self._n_log = len(self._lam_log)
         self._k = 0
-        # quantities of the last step (for inspection and tests)
-        self.lam: np.ndarray = np.zeros(6)
-        self.V_tilde: tuple | np.ndarray = np.zeros(6)
-        self.F_tilde: tuple | np.ndarray = np.zeros(6)
-        self._a = np.zeros(6)
+        # quantities of the last step (for inspection and tests; the kernel keeps its own)
+        self._lam, self._V_tilde, self._F_tilde, self._a = np.zeros(6), (0.0,) * 6, (0.0,) * 6, np.zeros(6)
         self._a_offset = (0.0,) * 6
         self.lam_dot = self.gamma = self.lam_ddot_ref = None
         self.dexp = self.dexp_inv = self.dexp_dot = None
+        self._kernel = TwistKernel(self, self._K_diag, self._G_diag) if (
+            self._twist and self._K_diag is not None and self._G_diag is not None) else None
 
     # ------------------------------------------------------------------ the step
     def compute(self, t: float, state: ArmModel, ref: Reference, wrench: np.ndarray) -> np.ndarray:
+        if self._kernel is not None:  # twist, diagonal gains: compiled (se3_kernel.py)
+            return self._kernel(t, state, ref, wrench)
         arm = state
         # --- world → TCP (body) axes: one product for every vector
         W, w_err, w_twist, w_jdv, w_ref_twist, w_ref_accel, w_wrench, body = self._buffers
@@ -254,18 +251,11 @@ class SE3LieController(Controller):
         # --- λ = log6(T̃) = [J(w)⁻¹p̃; w], w = log3(R̃); refused at ‖w‖ ≥ π
         w0, w1, w2, th = log3_list(c00, c10, c20, c01, c11, c21, c02, c12, c22)
         if not th < _PI_LIMIT:
-            try:
-                lie.check_rotation_domain((0.0, 0.0, 0.0, w0, w1, w2))
-            except ValueError as exc:
-                raise ValueError(f"se3_lie at t = {t:.3f} s: {exc}") from None
+            self.raise_out_of_domain(t, (w0, w1, w2), th, self._w_prev, False)
         if th > _HALF_PI:  # a step through π shows as a flip of λ_rot (log3 stays ≤ π)
             p0, p1, p2 = self._w_prev
             if p0 * w0 + p1 * w1 + p2 * w2 < 0.0 and p0 * p0 + p1 * p1 + p2 * p2 > _HALF_PI_SQ:
-                raise ValueError(
-                    f"se3_lie at t = {t:.3f} s: the orientation error |λ_rot| passed through π "
-                    f"within one step (λ_rot flipped from {_sqrt(p0 * p0 + p1 * p1 + p2 * p2):.6g} "
-                    f"rad about one axis to {th:.6g} rad about the opposite one): the SE(3) "
-                    f"impedance requires |λ_rot| < π (the pose-error logarithm is not unique at π)")
+                self.raise_out_of_domain(t, (w0, w1, w2), th, self._w_prev, True)
         self._w_prev = (w0, w1, w2)
         g, e, dg, de = inv_coefficients(th)  # J(w)⁻¹'s coefficients g, e and g1, e1
         wp = w0 * e0 + w1 * e1 + w2 * e2
@@ -334,12 +324,7 @@ class SE3LieController(Controller):
             # --- V̇_ref = Ad(T̃)V̇_d + ad(Ṽ)V − A⁻¹(F̃ − D·Ṽ − dexp⁻ᵀKλ)
             # dexp⁻ᵀy = [J⁻ᵀy_v; Qiᵀy_v + J⁻ᵀy_w] with J⁻ᵀy = g y + ½ w×y + e w(w·y) and
             # Qiᵀy = g1 s y + ½ λ_v×y + e(λ_v(w·y) + w(λ_v·y)) + e1 s w(w·y), s = w·λ_v
-            kd = self._K_diag
-            if kd is None:
-                y0, y1, y2, y3, y4, y5 = self.K.dot(lam).tolist()
-            else:
-                y0, y1, y2 = kd[0] * l0, kd[1] * l1, kd[2] * l2
-                y3, y4, y5 = kd[3] * w0, kd[4] * w1, kd[5] * w2
+            y0, y1, y2, y3, y4, y5 = self.K.dot(lam).tolist()
             s = w0 * l0 + w1 * l1 + w2 * l2
             wy = w0 * y0 + w1 * y1 + w2 * y2
             ly = l0 * y0 + l1 * y1 + l2 * y2
@@ -359,27 +344,13 @@ class SE3LieController(Controller):
             r5 = F_tilde[5] - (qs * y2 + 0.5 * (l0 * y1 - l1 * y0) + ewy * l2 + qw * w2
                                + g * y5 + 0.5 * (w0 * y4 - w1 * y3) + ewz * w2)
             # a = V̇_ref − J̇_b v + b·V = base − A⁻¹(r − D·Ṽ) = base − G·[r; −Ṽ]
-            gd = self._G_diag
-            if gd is None:
-                a = _fromiter(base, _F64, 6)
-                a -= self.G.dot(_fromiter((r0, r1, r2, r3, r4, r5, -t0, -t1, -t2, -t3, -t4, -t5),
-                                          _F64, 12))
-            else:  # A and D diagonal: G·[r; −Ṽ] row by row, G = [diag(1/a), diag(d/a)]
-                i0, i1, i2, i3, i4, i5, h0, h1, h2, h3, h4, h5 = gd
-                b0, b1, b2, b3, b4, b5 = base
-                if P is not None:  # floor active: a = base + P(a − base) = [P, I]·[a − base; base]
-                    a = self._P_and_I.dot(_fromiter((
-                        h0 * t0 - i0 * r0, h1 * t1 - i1 * r1, h2 * t2 - i2 * r2, h3 * t3 - i3 * r3,
-                        h4 * t4 - i4 * r4, h5 * t5 - i5 * r5, b0, b1, b2, b3, b4, b5), _F64, 12))
-                    P = None  # applied
-                else:
-                    a = _fromiter((b0 - i0 * r0 + h0 * t0, b1 - i1 * r1 + h1 * t1,
-                                   b2 - i2 * r2 + h2 * t2, b3 - i3 * r3 + h3 * t3,
-                                   b4 - i4 * r4 + h4 * t4, b5 - i5 * r5 + h5 * t5), _F64, 6)
+            a = _fromiter(base, _F64, 6)
+            a -= self.G.dot(_fromiter((r0, r1, r2, r3, r4, r5, -t0, -t1, -t2, -t3, -t4, -t5),
+                                      _F64, 12))
         else:
             a = self._lambda_space(lam, V_tilde, F_tilde, base)
 
-        if P is not None:  # (None: floor inactive, a untouched, or applied above)
+        if P is not None:  # (None: floor inactive, a untouched)
             base_v = _fromiter(base, _F64, 6)
             a = base_v + P.dot(a - base_v)
         force = self.task_inertia.solve(Jb, JbMinv, a)  # Λ(V̇_ref − J̇_b v + bV)
@@ -393,9 +364,9 @@ class SE3LieController(Controller):
             tau += self.friction(tau, v, arm.h)
 
         # --- bookkeeping
-        if th > self.max_rotation_error:
-            self.max_rotation_error = th
-        self.lam, self.V_tilde, self.F_tilde = lam, V_tilde, F_tilde
+        if th > self._max_rot:
+            self._max_rot = th
+        self._lam, self._V_tilde, self._F_tilde = lam, V_tilde, F_tilde
         self._a, self._a_offset = a, (o0, o1, o2, o3, o4, o5)
         return tau
 
@@ -423,13 +394,42 @@ class SE3LieController(Controller):
     # ------------------------------------------------------------------ inspection
     @property
     def diagonal_gains(self) -> bool:
-        """Whether the step uses the element-wise path of diagonal A, D, K (the config's case)."""
+        """Whether A, D, K are diagonal (the config's case; with twist: the compiled step)."""
         return self._K_diag is not None and self._G_diag is not None
+
+    def _last(self, name: str, offset: int):
+        return getattr(self, name) if self._kernel is None else self._kernel.mem[offset:offset + 6].copy()
+
+    lam = property(lambda self: np.asarray(self._last("_lam", kern.LAM), dtype=float),
+                   doc="λ of the last step [m | rad]")
+    V_tilde = property(lambda self: np.asarray(self._last("_V_tilde", kern.V_TILDE), dtype=float),
+                       doc="Ṽ of the last step (body axes) [m/s | rad/s]")
+    F_tilde = property(lambda self: np.asarray(self._last("_F_tilde", kern.F_TILDE), dtype=float),
+                       doc="F̃ of the last step (body axes) [N | N·m]")
 
     @property
     def Vdot_ref(self) -> np.ndarray:
         """V̇_ref of the last step (body axes) [m/s², rad/s²]."""
-        return self._a + np.array(self._a_offset)
+        return self._last("_a", kern.A) + self._last("_a_offset", kern.A_OFFSET)
+
+    @property
+    def max_rotation_error(self) -> float:
+        """The largest ‖λ_rot‖ seen [rad]."""
+        return self._max_rot if self._kernel is None else float(self._kernel.mem[kern.MAX_ROT])
+
+    def raise_out_of_domain(self, t: float, w, th: float, w_prev, flipped: bool):
+        """The step's ValueError: ‖λ_rot‖ at π, or λ_rot flipped through π within one step."""
+        if not flipped:
+            try:
+                lie.check_rotation_domain((0.0, 0.0, 0.0, *w))
+            except ValueError as exc:
+                raise ValueError(f"se3_lie at t = {t:.3f} s: {exc}") from None
+        p0, p1, p2 = w_prev
+        raise ValueError(
+            f"se3_lie at t = {t:.3f} s: the orientation error |λ_rot| passed through π "
+            f"within one step (λ_rot flipped from {_sqrt(p0 * p0 + p1 * p1 + p2 * p2):.6g} "
+            f"rad about one axis to {th:.6g} rad about the opposite one): the SE(3) "
+            f"impedance requires |λ_rot| < π (the pose-error logarithm is not unique at π)")
 
     def lambda_gains(self, lam, lam_dot):
         """(K_V, K_P, K_F) at (λ, λ̇), formed explicitly with solves (for tests)."""
