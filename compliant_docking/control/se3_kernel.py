@@ -13,18 +13,19 @@ What stays in Python, every step or on some steps:
 * the integral action (:class:`~.integral.PositionIntegral`, its own Python floats): its force
   F_i is an input of the kernel;
 * the steps on which :class:`~.base.TaskInertia` checks the condition number (every
-  ``check_every`` steps, every step while above the threshold) or the apparent-inertia floor
-  refreshes its P (every ``every`` steps): the kernel stops once V̇_ref is formed (``STAGE``)
-  and the step ends with the numpy code of main (floor, ``TaskInertia.solve`` with its
-  ``dposv``/``dpocon`` and fallback, τ, ``FrictionFeedForward``). So the diagnostics
+  ``check_every`` steps, every step while above the threshold): the kernel stops once V̇_ref
+  is formed (``STAGE``), ``TaskInertia.solve`` (its ``dposv``, ``dpocon`` and fallback) applies
+  Λ, and a second kernel (:func:`finish`) forms τ. So the diagnostics
   ``lambda_fallback_steps`` / ``lambda_max_condition`` keep their meaning exactly;
 * a step on which the kernel's Cholesky fails (Λ⁻¹ not positive definite, or NaN): it returns
   ``NEEDS_SOLVE`` and ``TaskInertia.solve`` takes the step (dposv fails the same way, the
   damped pseudo-inverse follows), as on main.
 
 Twins of numpy formulas used by other laws (tests/control/test_se3_kernel.py checks them on
-random inputs against the numpy pieces): the Cholesky solve (``dposv``) and the friction
-feed-forward (``FrictionFeedForward.__call__``, all three modes). log3 and J(w)⁻¹'s
+random inputs against the numpy pieces): the Cholesky solve (``dposv``), the friction
+feed-forward (``FrictionFeedForward.__call__``, all three modes) and the apparent-inertia
+floor's refresh (``ApparentInertiaFloor.refresh``: its ``dpotrf`` test by the same Cholesky,
+its ``dsyevd`` by numba's ``np.linalg.eigh``, LAPACK's ``dsyevd`` as well). log3 and J(w)⁻¹'s
 coefficients are lie's own functions compiled, not copies.
 """
 
@@ -37,6 +38,7 @@ import numpy as np
 from compliant_docking.control.jit import kernel
 from compliant_docking.control.lie.series import PI_MARGIN, inv_coefficients
 from compliant_docking.control.lie.so3 import log3_list
+from compliant_docking.planning.base import Reference
 
 _log3 = kernel(log3_list)
 _inv_coefficients = kernel(inv_coefficients)
@@ -54,10 +56,11 @@ TORQUE, VELOCITY, TORQUE_UNBIASED = 0.0, 1.0, 2.0
 # par (constant): gains, flags, friction parameters
 K_DIAG, G_INV, G_D, F_D = 0, 6, 12, 18
 NULL_DAMPING, HAS_F_D, FORCE_FEEDBACK, FRICTION_ON, FRICTION_MODE = 24, 25, 26, 27, 28
-FRICTION = 29  # f (nv), b (nv), scale (nv)
+FLOOR, FLOOR_RATIO, W_SQRT, W_ISQRT = 29, 30, 31, 37  # the floor: on, ratio, W^½, W^-½
+FRICTION = 43  # f (nv), b (nv), scale (nv)
 # mem (state and outputs)
-WPREV, MAX_ROT, THETA = 0, 3, 4
-LAM, V_TILDE, F_TILDE, A, A_OFFSET, Z, F_BODY, TAU = 6, 12, 18, 24, 30, 36, 48, 54
+WPREV, MAX_ROT, THETA, FLOOR_ACTIVE, FLOOR_MAX_RATIO = 0, 3, 4, 5, 6
+LAM, V_TILDE, F_TILDE, A, A_OFFSET, Z, F_BODY, TAU = 8, 14, 20, 26, 32, 38, 50, 56
 
 _PI_LIMIT = math.pi - PI_MARGIN
 _HALF_PI = 0.5 * math.pi
@@ -87,9 +90,9 @@ def friction_feedforward(mode, f, b, scale, tau_pre, v, bias, out):
 
 
 @kernel
-def cholesky_solve6(S, rhs, L, x):
-    """Twin of LAPACK ``dposv`` on a 6×6 S (lower triangle read): x = S⁻¹rhs, L the factor.
-    Returns False when a pivot is not positive (or NaN): S not positive definite."""
+def cholesky6(S, L):
+    """L, the Cholesky factor of a 6×6 S (lower triangle read), as LAPACK ``dpotrf``; False
+    when a pivot is not positive (or NaN): S not positive definite."""
     for j in range(6):
         s = S[j, j]
         for m in range(j):
@@ -103,6 +106,15 @@ def cholesky_solve6(S, rhs, L, x):
             for m in range(j):
                 s -= L[i, m] * L[j, m]
             L[i, j] = s / d
+    return True
+
+
+@kernel
+def cholesky_solve6(S, rhs, L, x):
+    """Twin of LAPACK ``dposv`` on a 6×6 S (lower triangle read): x = S⁻¹rhs, L the factor.
+    Returns False when a pivot is not positive (or NaN): S not positive definite."""
+    if not cholesky6(S, L):
+        return False
     for i in range(6):  # L y = rhs
         s = rhs[i]
         for m in range(i):
@@ -117,7 +129,38 @@ def cholesky_solve6(S, rhs, L, x):
 
 
 @kernel
-def step(mode, k, floor_on, Rd, pd, Vd, Ad, R, p, tw, jdv, J, Minv, M, v, h, wrench, Fi,
+def floor_refresh(S, w_sqrt, w_isqrt, ratio, PI, mem):
+    """Twin of ``ApparentInertiaFloor.refresh`` for Λ⁻¹ = S: P = W_eff⁻¹W into PI[:, :6] and
+    True, or False when W ⪰ ratio·Λ already (P None). mem[FLOOR_MAX_RATIO]: the largest σ."""
+    T = np.empty((6, 6))  # W^½ Λ⁻¹ W^½, transposed (LAPACK read the upper triangle there)
+    U = np.empty((6, 6))
+    for i in range(6):
+        for j in range(6):
+            T[j, i] = S[i, j] * (w_sqrt[i] * w_sqrt[j])
+            U[j, i] = T[j, i] - ratio if i == j else T[j, i]
+    if cholesky6(U, np.empty((6, 6))):  # every 1/σ > ratio: nothing to do
+        return False
+    if not np.all(np.isfinite(T)):  # (dsyevd's failure in numpy: P None)
+        return False
+    mu, V = np.linalg.eigh(T)
+    if mu[0] <= 0.0:
+        return False
+    mem[FLOOR_MAX_RATIO] = max(mem[FLOOR_MAX_RATIO], 1.0 / mu[0])
+    inv_ratio = 1.0 / ratio
+    c = np.empty(6)
+    for m in range(6):
+        c[m] = min(mu[m] * inv_ratio, 1.0)
+    for i in range(6):
+        for j in range(6):
+            s = 0.0
+            for m in range(6):
+                s += (w_isqrt[i] * V[i, m] * c[m]) * (V[j, m] * w_sqrt[j])
+            PI[i, j] = s
+    return True
+
+
+@kernel
+def step(mode, k, refresh, Rd, pd, Vd, Ad, R, p, tw, jdv, J, Minv, M, v, h, wrench, Fi,
          par, PI, mem, work, lam_log):
     """One control step of the twist formulation (diagonal gains); see the module docstring.
 
@@ -257,23 +300,28 @@ def step(mode, k, floor_on, Rd, pd, Vd, Ad, R, p, tw, jdv, J, Minv, M, v, h, wre
             for m in range(nv):
                 s += work[i, m] * Minv[m, c]
             work[6 + i, c] = s
-    if mode == STAGE:
-        return NEEDS_SOLVE
-    if floor_on:  # a = [P, I]·[d; base]
-        for j in range(6):
-            s = 0.0
-            for m in range(12):
-                s += PI[j, m] * mem[Z + m]
-            mem[A + j] = s
-
-    # --- Λ(V̇_ref − J̇_b v + bV) by Cholesky of Λ⁻¹ = J_b M⁻¹ J_bᵀ
-    S = np.empty((6, 6))
+    S = np.empty((6, 6))  # Λ⁻¹ = J_b M⁻¹ J_bᵀ
     for i in range(6):
-        for j in range(i + 1):
+        for j in range(6):
             s = 0.0
             for m in range(nv):
                 s += work[6 + i, m] * work[j, m]
             S[i, j] = s
+    if par[FLOOR] != 0.0:  # A⁻¹(…) → A_eff⁻¹(…): a = [P, I]·[d; base] while P is not None
+        if refresh:
+            active = floor_refresh(S, par[W_SQRT:W_SQRT + 6], par[W_ISQRT:W_ISQRT + 6],
+                                   par[FLOOR_RATIO], PI, mem)
+            mem[FLOOR_ACTIVE] = 1.0 if active else 0.0
+        if mem[FLOOR_ACTIVE] != 0.0:
+            for j in range(6):
+                s = 0.0
+                for m in range(12):
+                    s += PI[j, m] * mem[Z + m]
+                mem[A + j] = s
+    if mode == STAGE:
+        return NEEDS_SOLVE
+
+    # --- Λ(V̇_ref − J̇_b v + bV) by Cholesky of Λ⁻¹
     L = np.empty((6, 6))
     x = np.empty(6)
     if not cholesky_solve6(S, mem[A:A + 6], L, x):
@@ -310,12 +358,12 @@ def finish(x, M, v, h, par, mem, work):
 
 class TwistKernel:
     """The per-step driver of :func:`step` for one :class:`~.se3_lie.SE3LieController`
-    (twist formulation, diagonal gains): buffers, the choice of full or staged step, and the
-    numpy end of a staged step (main's code: floor, TaskInertia, τ, friction)."""
+    (twist formulation, diagonal gains): buffers, the integral action, the choice of full or
+    staged step, TaskInertia on the staged ones, the floor's and TaskInertia's counters."""
 
     def __init__(self, ctrl, K_diag, G_diag):
         nv = ctrl.arm.nv
-        fr = ctrl.friction
+        fr, floor = ctrl.friction, ctrl.inertia_floor
         par = np.zeros(par_size(nv))
         par[K_DIAG:K_DIAG + 6] = K_diag
         par[G_INV:G_D + 6] = G_diag  # [1/a; d/a]
@@ -326,17 +374,30 @@ class TwistKernel:
         par[FRICTION_ON] = float(fr.active)
         par[FRICTION_MODE] = (TORQUE_UNBIASED if fr._unbiased else TORQUE if fr._torque_mode else VELOCITY)
         par[FRICTION:] = np.concatenate([fr.f, fr.b, fr._scale])
+        if floor is not None:
+            par[FLOOR], par[FLOOR_RATIO] = 1.0, floor.ratio
+            par[W_SQRT:W_SQRT + 6], par[W_ISQRT:W_ISQRT + 6] = floor._w_sqrt, floor._w_isqrt
         self.par = par
         self.mem = np.zeros(mem_size(nv))
         self.work = np.zeros((12, nv))
         self.Jb, self.JbMinv = self.work[:6], self.work[6:]
-        self.ctrl = ctrl
-        self.floor = ctrl.inertia_floor
-        self.PI = self.floor.P_and_I if self.floor is not None else np.zeros((6, 12))
-        self.ti = ctrl.task_inertia
-        self.integral = ctrl.integral
+        self.ctrl, self.floor, self.ti, self.integral = ctrl, floor, ctrl.task_inertia, ctrl.integral
+        self.PI = floor.P_and_I if floor is not None else np.zeros((6, 12))
         self._err = np.zeros(3)
         self._no_force = (0.0, 0.0, 0.0)
+        self._warm_up(ctrl.arm)
+
+    def _warm_up(self, arm) -> None:
+        """Load (or compile) the kernels for this step's argument types now, on throwaway
+        buffers, so that neither the loop's timing nor its first step pays for it."""
+        ref = Reference()
+        ref.rot[:] = arm.rot
+        mem, work, PI = self.mem.copy(), self.work.copy(), self.PI.copy()
+        for mode in (FULL, STAGE):
+            step(mode, 0, False, ref.rot, ref.pos, ref.twist, ref.accel, arm.rot, arm.pos,
+                 arm.twist, arm.Jdot_v, arm.J, arm.Minv, arm.M, arm.v, arm.h, np.zeros(6),
+                 self._no_force, self.par, PI, mem, work, np.zeros((0, 6)))
+        finish(np.zeros(6), arm.M, arm.v, arm.h, self.par, mem, work)
 
     def __call__(self, t, arm, ref, wrench) -> np.ndarray:
         ctrl, floor, ti, mem = self.ctrl, self.floor, self.ti, self.mem
@@ -346,37 +407,29 @@ class TwistKernel:
         else:
             np.subtract(ref.pos, arm.pos, out=self._err)
             F_i = integral.update(self._err, wrench)
-        # TaskInertia's condition-number check and the floor's refresh run in numpy (staged
-        # step); their counters are advanced here on the other steps (base.py, shaping.py)
-        staged = ti._ill or ti._step % ti.check_every == 0 or (
-            floor is not None and floor._step % floor.every == 0)
-        floor_on = not staged and floor is not None and floor.P is not None
+        # steps with TaskInertia's condition-number check end in numpy (staged); the floor's
+        # refresh runs in the kernel; the counters of both objects are advanced here
+        staged = ti._ill or ti._step % ti.check_every == 0
+        refresh = floor is not None and floor._step % floor.every == 0
         k = ctrl._k
         ctrl._k = k + 1
-        status = step(STAGE if staged else FULL, k, floor_on, ref.rot, ref.pos, ref.twist,
+        status = step(STAGE if staged else FULL, k, refresh, ref.rot, ref.pos, ref.twist,
                       ref.accel, arm.rot, arm.pos, arm.twist, arm.Jdot_v, arm.J, arm.Minv,
                       arm.M, arm.v, arm.h, wrench, F_i, self.par, self.PI, mem, self.work,
                       ctrl._lam_log)
-        if status == DONE:
-            ti._step += 1
-            if floor is not None:
-                floor._step += 1
-                if floor_on:
-                    floor.active_steps += 1
-            return mem[TAU:].copy()
-        if status != NEEDS_SOLVE:
+        if status > NEEDS_SOLVE:
             ctrl.raise_out_of_domain(t, mem[LAM + 3:LAM + 6].tolist(), mem[THETA],
                                      mem[WPREV:WPREV + 3].tolist(), status == FLIPPED)
-        Jb, JbMinv = self.Jb, self.JbMinv
-        if staged:
-            P = None if floor is None else floor.current(Jb, JbMinv)
-            a = floor.P_and_I.dot(mem[Z:Z + 12]) if P is not None else mem[A:A + 6].copy()
-        else:  # the kernel's Cholesky failed: TaskInertia.solve's fallback takes the step
-            if floor is not None:
-                floor._step += 1
-                if floor_on:
-                    floor.active_steps += 1
-            a = mem[A:A + 6].copy()
-        mem[A:A + 6] = a
-        finish(ti.solve(Jb, JbMinv, a), arm.M, arm.v, arm.h, self.par, mem, self.work)
+        if floor is not None:  # ApparentInertiaFloor.current's bookkeeping
+            if refresh:
+                floor.P = self.PI[:, :6].copy() if mem[FLOOR_ACTIVE] else None
+                floor.max_ratio = float(mem[FLOOR_MAX_RATIO])
+            floor._step += 1
+            if floor.P is not None:
+                floor.active_steps += 1
+        if status == DONE:
+            ti._step += 1
+        else:  # TaskInertia.solve: its check (staged), or its fallback (the Cholesky failed)
+            finish(ti.solve(self.Jb, self.JbMinv, mem[A:A + 6].copy()), arm.M, arm.v, arm.h,
+                   self.par, mem, self.work)
         return mem[TAU:].copy()

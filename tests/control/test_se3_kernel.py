@@ -23,6 +23,7 @@ from compliant_docking.config import FrictionComp
 from compliant_docking.control import se3_kernel
 from compliant_docking.control.base import FrictionFeedForward
 from compliant_docking.control.se3_lie import SE3LieController
+from compliant_docking.control.shaping import ApparentInertiaFloor
 from compliant_docking.planning.base import Reference
 from compliant_docking.sim import simulate
 from tests.helpers import make_cfg
@@ -159,3 +160,25 @@ def test_domain_errors_keep_their_messages():
         fast.compute(0.25, arm, *_case(arm, rng, 2.0, -axis))
     with pytest.raises(ValueError, match=r"se3_lie at t = 0\.500 s: .*π"):
         fast.compute(0.5, arm, *_case(arm, rng, math.pi, axis))
+
+
+def test_floor_refresh_twin_matches_the_numpy_floor():
+    rng = np.random.default_rng(9)
+    W = np.array([2.0, 2.0, 2.0, 0.2, 0.2, 0.2])
+    active_seen = set()
+    for ratio in (0.05, 0.75, 3.0):
+        for _ in range(20):
+            B = rng.standard_normal((6, 6)) * np.r_[[0.7] * 3, [3.0] * 3]
+            lam_inv = B @ B.T + 0.05 * np.eye(6)
+            floor = ApparentInertiaFloor(W, ratio)
+            floor.refresh(lam_inv)
+            PI, mem = np.zeros((6, 12)), np.zeros(se3_kernel.mem_size(7))
+            active = se3_kernel.floor_refresh(lam_inv, floor._w_sqrt, floor._w_isqrt, ratio, PI, mem)
+            assert active == (floor.P is not None)
+            active_seen.add(active)
+            if active:  # P to 1e-12; σ_max = 1/μ_min, μ_min to eps·cond(T) relative (Weyl)
+                assert close(PI[:, :6], floor.P, 1e-12)
+                cond = np.linalg.cond(lam_inv * np.outer(floor._w_sqrt, floor._w_sqrt))
+                rel = 1e-12 + 1e-15 * cond
+                assert mem[se3_kernel.FLOOR_MAX_RATIO] == pytest.approx(floor.max_ratio, rel=rel)
+    assert active_seen == {False, True}  # both outcomes of the positive-definiteness test
