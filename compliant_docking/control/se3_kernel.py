@@ -1,12 +1,12 @@
 r"""``controller=se3_lie``'s hot step compiled: the twist formulation with diagonal A, D, K
 (the config's case) in one numba kernel per control step (:mod:`~.jit`).
 
-The kernel evaluates, in one call, what :class:`~.se3_lie.SE3LieController` evaluates with
-Python floats and numpy in its general path (the same formulas in the same order, so the two
-differ by the order of summation in the products only): the body vectors, λ = log6(T̃) with
-its domain checks, Ṽ, F̃, V̇_ref − J̇_b v + b·V (the floor's P applied), J_b, J_b M⁻¹,
-Λ⁻¹ = J_b M⁻¹ J_bᵀ, the Λ solve by its own 6×6 Cholesky factorization, τ and the friction
-feed-forward.
+The kernel evaluates, in one call, the scalar formulas of :class:`~.se3_lie.SE3LieController`'s
+numpy step, in the same order (the results differ by the order of summation in the products
+only): the body vectors, λ = log6(T̃) with its domain checks, Ṽ, F̃, V̇_ref − J̇_b v + b·V,
+the apparent-inertia floor (P applied every step, refreshed every ``every`` steps), J_b,
+J_b M⁻¹, Λ⁻¹ = J_b M⁻¹ J_bᵀ, the Λ solve by its own 6×6 Cholesky factorization, τ and the
+friction feed-forward.
 
 What stays in Python, every step or on some steps:
 
@@ -17,9 +17,9 @@ What stays in Python, every step or on some steps:
   is formed (``STAGE``), ``TaskInertia.solve`` (its ``dposv``, ``dpocon`` and fallback) applies
   Λ, and a second kernel (:func:`finish`) forms τ. So the diagnostics
   ``lambda_fallback_steps`` / ``lambda_max_condition`` keep their meaning exactly;
-* a step on which the kernel's Cholesky fails (Λ⁻¹ not positive definite, or NaN): it returns
-  ``NEEDS_SOLVE`` and ``TaskInertia.solve`` takes the step (dposv fails the same way, the
-  damped pseudo-inverse follows), as on main.
+* a step on which the kernel's Cholesky fails (a pivot ≤ 0 or NaN): it returns
+  ``NEEDS_SOLVE`` and ``TaskInertia.solve`` takes the step, so dposv decides as on main (it
+  fails on the same pivots, then the damped pseudo-inverse follows).
 
 Twins of numpy formulas used by other laws (tests/control/test_se3_kernel.py checks them on
 random inputs against the numpy pieces): the Cholesky solve (``dposv``), the friction
