@@ -7,26 +7,16 @@ import math
 
 import numpy as np
 
-#: contact magnitude above which the preload ramps up [N] (CONTROL_LAWS.md §2)
-PRELOAD_CONTACT_N = 1.0
-#: contact magnitude below which the contact counts as lost again [N] (hysteresis)
-PRELOAD_RELEASE_N = 0.5
+# compiled (the step kernel calls them), defined next to it: see kernel.py
+from compliant_docking.control.hqp.kernel import PRELOAD_CONTACT_N as PRELOAD_CONTACT_N
+from compliant_docking.control.hqp.kernel import PRELOAD_RELEASE_N as PRELOAD_RELEASE_N
+from compliant_docking.control.hqp.kernel import preload_step
+from compliant_docking.control.hqp.kernel import stiffness_scale as stiffness_scale
 
 
 def contact_magnitude(wrench: np.ndarray, deadband: float) -> float:
     """F = max(‖[f; m]‖ − deadband, 0) [N] (the norm mixes N and N·m, as in the paper)."""
     return max(math.sqrt(float(wrench.dot(wrench))) - deadband, 0.0)
-
-
-def stiffness_scale(F: float, K_min_ratio: float, k_alpha: float) -> float:
-    """s with K_r = s·K0: s = clip(1 − α, K_min_ratio, 1), α = 1/(1 + exp(−k_alpha F)).
-
-    Element-wise clip((1 − α)K0, K_min_ratio K0, K0) equals s·K0 for K0 ≥ 0. s is 0.5 at
-    F = 0 and non-increasing in F (1 − α = 1/(1 + exp(k_alpha F))).
-    """
-    x = k_alpha * F
-    one_minus_alpha = 1.0 / (1.0 + math.exp(x)) if x < 700.0 else 0.0
-    return min(max(one_minus_alpha, K_min_ratio), 1.0)
 
 
 def adaptive_stiffness(F: float, K0: np.ndarray, K_min_ratio: float, k_alpha: float) -> np.ndarray:
@@ -101,16 +91,17 @@ class PreloadRamp:
             raise ValueError(f"controller.preload_ramp_s must be > 0, got {ramp_s}")
         self.target = float(target)
         self.step = self.target / float(ramp_s) * float(dt)
-        self.value = 0.0
-        self.in_contact = False
+        # [value, in contact (0/1), step, target]: the state compiled code updates in place
+        # (the HQP step kernel works on a copy of it in its workspace)
+        self.state = np.array([0.0, 0.0, self.step, self.target])
+
+    @property
+    def value(self) -> float:
+        return float(self.state[0])
+
+    @property
+    def in_contact(self) -> bool:
+        return bool(self.state[1])
 
     def update(self, F: float) -> float:
-        if F > PRELOAD_CONTACT_N:
-            self.in_contact = True
-        elif F < PRELOAD_RELEASE_N:
-            self.in_contact = False
-        if self.in_contact:
-            self.value = min(self.value + self.step, self.target)
-        elif self.value:
-            self.value = max(self.value - self.step, 0.0)
-        return self.value
+        return float(preload_step(self.state, float(F)))

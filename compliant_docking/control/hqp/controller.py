@@ -42,23 +42,17 @@ import math
 
 import numpy as np
 import pinocchio as pin
-from scipy.linalg import lapack
 
+import compliant_docking.control.hqp.kernel as K
 from compliant_docking.config import ForceSource, NullSpaceMetric
 from compliant_docking.control.base import Controller, vector_setting
-from compliant_docking.control.hqp.compliance import (
-    PreloadRamp,
-    modal_damping,
-    stiffness_scale,
-)
-from compliant_docking.control.hqp.manipulability import ManipulabilityGradient, check_revolute_chain
+from compliant_docking.control.hqp.compliance import PreloadRamp, modal_damping
+from compliant_docking.control.hqp.manipulability import check_revolute_chain
 from compliant_docking.control.hqp.qp_level import QPLevel
 from compliant_docking.control.observer import MomentumObserver
 from compliant_docking.planning.base import Reference
 from compliant_docking.sim.context import ControlContext
 from compliant_docking.sim.models import ArmModel
-
-_dsyev, _dpotrf, _dpotrs, _dposv = lapack.dsyev, lapack.dpotrf, lapack.dpotrs, lapack.dposv
 
 #: Tikhonov regulariser of the level-1 Hessian (CONTROL_LAWS.md §2)
 REGULARISER = 1e-8
@@ -122,6 +116,9 @@ class HQPController(Controller):
         self.deadband = float(contact_deadband)
         self.sqrt_K0 = np.sqrt(self.K0)
         self._P = self.sqrt_K0[:, None] + self.sqrt_K0[None, :]  # D_r = √s·(Λ^½ ∘ P)
+        # the step kernel's workspace: every per-step buffer is a view into it
+        self._off, cst_size, ws_size = K.layout(n)
+        self._ws = np.zeros(ws_size)
         self.threshold = float(condition_threshold)
         self.manipulability_threshold, self.singularity_weight = float(omega_th), float(k_sa)
         self.posture_stiffness = float(k_ji) * vector_setting(K_ji, n, "K_ji", minimum=0.0)
@@ -142,34 +139,74 @@ class HQPController(Controller):
         self.null_space_metric = NullSpaceMetric(null_space_metric)
         self._inertia_metric = self.null_space_metric is NullSpaceMetric.inertia
         self._init_constraints(context, float(dt_p), eps_abs)
+        self._init_kernel(cst_size)
 
-        # per-step buffers
-        self._reg6 = REGULARISER * np.eye(6)
-        self._JJ = np.zeros((6, 6))
-        # [D_r; K_r] stacked (D_r symmetric): F_r = [ν_d − ν; −e]·[D_r; K_r]
-        self._DK = np.zeros((12, 6))
-        self._D = self._DK[:6]
-        self._K_diag = self._DK.reshape(-1)[36::7]  # the diagonal of the K_r block (a view)
-        self._z = np.zeros(12)
-        self._z_twist, self._z_pos, self._z_rot = self._z[:6], self._z[6:9], self._z[9:]
-        self._a_null = np.zeros(n)
-        self._Na = np.zeros(n)
-        self._gradient = ManipulabilityGradient(n)
-        self._Z_rows = 2 * 3 * n  # entries of Z (both candidates)
-        self._s = self._sqrt_s = math.nan  # the s that √s and K_r were made for (none yet)
-
-        # per-run statistics and per-step records
+        # per-run statistics and per-step records (the kernel's counters: properties below)
         self.steps = 0
-        self.lambda_floor_steps = 0
-        self.lambda_max_condition = 0.0
         self.modal_damping_steps = 0
         self.level1_fallbacks = 0  # level 1 failed: unconstrained least squares, level 2 skipped
         self.level2_zero_steps = 0  # a = 0 (level 2 failed or skipped)
-        self.singularity_steps = 0  # steps with w < omega_th
-        n_steps = int(context.n_steps)
-        self._rec = np.zeros((n_steps, 4))  # F, K_r scale s, preload, manipulability w
-        self._rec_len = n_steps
-        self._fast_steps = 0  # both closed forms met every row
+        self._rec = np.zeros((int(context.n_steps), 4))  # F, K_r scale s, preload, manipulability w
+
+    def _view(self, field: int, *shape: int) -> np.ndarray:
+        """The workspace's field ``field`` (kernel.W_*) as an array of the given shape."""
+        start = self._off[field]
+        return self._ws[start : start + math.prod(shape)].reshape(shape)
+
+    def _init_kernel(self, cst_size: int) -> None:
+        """The kernel's constants (``cst``) and the views of its workspace this class reads."""
+        n, ws = self.n, self._ws
+        cst = np.zeros(cst_size)
+        friction = self.friction
+        cst[: K.P_REG + 1] = (
+            self.deadband,
+            self.min_stiffness_ratio,
+            self.sigmoid_gain,
+            self.threshold,
+            self.manipulability_threshold,
+            self.singularity_weight,
+            self._inertia_metric,
+            self.use_force_feedback,
+            friction.active,
+            K.FRICTION_MODES[friction.mode.value],
+            self.solve_every_step,
+            self.integral is not None,
+            REGULARISER,
+        )
+        parts = (self.K0, self._P, self.axis, self._T_ji, self._half, friction.f, friction.b, friction._scale)
+        for start, part in zip(self._off, parts):
+            cst[start : start + part.size] = part.reshape(-1)
+        self._cst = cst
+        # the preload ramp's state lives in the workspace from now on
+        ws[K.W_PRELOAD : K.W_PRELOAD + 4] = self.preload.state
+        self.preload.state = ws[K.W_PRELOAD : K.W_PRELOAD + 4]
+        self._D = self._view(K.W_DK, 12, 6)[:6]  # of [D_r; K_r]
+        self._JMinv, self._lam = self._view(K.W_JMINV, 6, n), self._view(K.W_LAM, 6, 6)
+        self._lam_sqrt, self._V = self._view(K.W_LAM_SQRT, 6, 6), self._view(K.W_V, 6, 6)
+        self._root, self._b = self._view(K.W_ROOT, 6), self._view(K.W_B, 6)
+        self._a_null, self._Na = self._view(K.W_A_NULL, n), self._view(K.W_NA, n)
+        self._Z = self._view(K.W_Z_ROWS, 2, 3 * n)
+        self._tau_fast = self._Z[1, 2 * n :]  # the final candidate's torque rows
+        self._e_pos = np.zeros(3)  # x_d − x for the integral action
+
+    # counters the kernel keeps in its workspace
+    @property
+    def lambda_floor_steps(self) -> int:
+        return int(self._ws[K.W_FLOOR])
+
+    @property
+    def lambda_max_condition(self) -> float:
+        return float(self._ws[K.W_MAX_COND])
+
+    @property
+    def singularity_steps(self) -> int:
+        """Steps with w < omega_th (singularity avoidance active)."""
+        return int(self._ws[K.W_SINGULAR])
+
+    @property
+    def _fast_steps(self) -> int:
+        """Steps where both closed forms met every row."""
+        return int(self._ws[K.W_FAST])
 
     def _init_constraints(self, context: ControlContext, dt_p: float, eps_abs: float) -> None:
         """Constant parts of the 21 constraint rows, and the two QP levels.
@@ -198,7 +235,7 @@ class HQPController(Controller):
         self._half = half
         self._bounds = np.vstack([-half, half])
         eye = np.eye(n)
-        T = np.zeros((3 * n + 1, 3 * n))
+        T = self._view(K.W_T, 3 * n + 1, 3 * n)
         T[:n, :n], T[:n, n : 2 * n] = dt_p * eye, 0.5 * dt_p**2 * eye
         T[n : 2 * n, n : 2 * n] = eye
         T[2 * n : 3 * n, :n], T[2 * n : 3 * n, n : 2 * n] = eye, dt_p * eye
@@ -207,7 +244,7 @@ class HQPController(Controller):
         self._T_M = T[:n, 2 * n :]  # M (symmetric: Mᵀ = M)
         self._T_state = T[n:]  # [q, v, 1] → offsets o
         self._hhat = T[3 * n, 2 * n :]  # ĥ = h + friction feed-forward (a view)
-        self._Y = np.zeros((2, 3 * n + 1))  # rows [q̈, q, v, 1]: level-1 and final candidates
+        self._Y = self._view(K.W_Y_ROWS, 2, 3 * n + 1)  # rows [q̈, q, v, 1]: level-1 and final candidates
         self._Y[:, 3 * n] = 1.0
         self._X = self._Y[:, :n]
         self._Y_q, self._Y_v = self._Y[:, n : 2 * n], self._Y[:, 2 * n : 3 * n]
@@ -226,134 +263,38 @@ class HQPController(Controller):
 
     # ------------------------------------------------------------------ per step
     def compute(self, t: float, state: ArmModel, ref: Reference, wrench: np.ndarray) -> np.ndarray:
+        """One call of the compiled step (control/hqp/kernel.py) and, when a row binds, the
+        constrained path in Python; the module doc gives the law."""
         arm = state
-        J, M, Minv, q, v = arm.J, arm.M, arm.Minv, arm.q, arm.v
-        n = self.n
-
-        # contact magnitude F, stiffness K_r = s·K0, preload p
         w_ext = wrench if self.observer is None else self.observer.update(state, wrench)
-        F = max(math.sqrt(w_ext.dot(w_ext)) - self.deadband, 0.0) if self.use_force_feedback else 0.0
-        s = stiffness_scale(F, self.min_stiffness_ratio, self.sigmoid_gain)
-        if s != self._s:  # √s and K_r = s·K0 follow s (constant while clamped at K_min in contact)
-            self._s, self._sqrt_s = s, math.sqrt(s)
-            np.multiply(self.K0, s, out=self._K_diag)
-        preload = self.preload.update(F)
-
-        # Λ⁻¹ = J M⁻¹ Jᵀ; Λ^½ and Λ from its eigendecomposition; D_r into its buffer
-        JMinv = J.dot(Minv)
-        lam_inv = JMinv.dot(J.T)
-        lam = self._task_inertia(lam_inv)
-
-        # F_r = [D_r, K_r]·[ν_d − ν; x_d − x; −log3(R R_dᵀ)] + F_pre, b = ν̇_d − J̇v + Λ⁻¹F_r
-        z = self._z
-        np.subtract(ref.twist, arm.twist, out=self._z_twist)
-        np.subtract(ref.pos, arm.pos, out=self._z_pos)
-        self._z_rot[:] = pin.log3(ref.rot.dot(arm.rot_T))
-        F_r = z.dot(self._DK)
         if self.integral is not None:  # + [F_i; 0] (integral action, docs/controllers/integral.md)
-            i0, i1, i2 = self.integral.update(self._z_pos, w_ext)
-            F_r[0], F_r[1], F_r[2] = F_r[0] + i0, F_r[1] + i1, F_r[2] + i2
-        if preload:
-            F_r[:3] += preload * self.axis
-        b = lam_inv.dot(F_r)
-        b += ref.accel
-        b -= arm.Jdot_v
-
-        # closed forms: level 1 q̈ = Jᵀ(J Jᵀ + εI)⁻¹ b (min-norm least squares), level 2 a = a_null
-        X = self._X
-        JJ = self._JJ
-        np.dot(J, J.T, out=JJ)
-        JJ += self._reg6
-        chol, info = _dpotrf(JJ)
-        if info == 0:
-            w = math.prod(chol.diagonal().tolist())  # √det(J Jᵀ)
-            if self._inertia_metric:  # M⁻¹Jᵀ(J M⁻¹Jᵀ + εI)⁻¹ b: minimises ‖Jq̈ − b‖² + ε q̈ᵀMq̈
-                np.dot(_dposv(lam_inv + self._reg6, b, 0, 1)[1], JMinv, out=X[0])  # overwrite_a
-            else:
-                np.dot(_dpotrs(chol, b)[0], J, out=X[0])
+            np.subtract(ref.pos, arm.pos, out=self._e_pos)
+            self._ws[K.W_INTEGRAL : K.W_INTEGRAL + 3] = self.integral.update(self._e_pos, w_ext)
+        rot_err = pin.log3(ref.rot.dot(arm.rot_T))  # log3(R_d Rᵀ) = −log3(R R_dᵀ)
+        k = self.steps
+        J, M, Minv = arm.J, arm.M, arm.Minv
+        status = K.hqp_step(
+            J, M, Minv, arm.h, arm.q, arm.v, arm.Jdot_v, arm.twist, arm.pos,
+            ref.twist, ref.pos, ref.accel, rot_err, w_ext, self._cst, self._ws, self._off, self._rec, k,
+        )  # fmt: skip
+        if status == K.MODAL:  # Eq. 29's D_r is not positive definite: damp each mode critically
+            self.modal_damping_steps += 1
+            V = self._V
+            self._D[:] = modal_damping(self._lam_sqrt, (V * self._root).dot(V.T), self.K0)
+            status = K.hqp_back(
+                J, M, Minv, arm.h, arm.q, arm.v, arm.Jdot_v, arm.twist, arm.pos,
+                ref.twist, ref.pos, ref.accel, rot_err, self._cst, self._ws, self._off, self._rec, k,
+            )  # fmt: skip
+        if status == K.FAST:
+            tau = self._tau_fast.copy()  # M(q̈ + N a) + ĥ
         else:
-            w = 0.0
-            X[0] = np.linalg.lstsq(J, b, rcond=None)[0]
-        self._Y_q[:] = q
-        self._Y_v[:] = v
-        a_null = self._null_task(J, Minv, w, chol if info == 0 else None)
-        # final candidate q̈ + N a_null, N a = a − M⁻¹JᵀΛJ a
-        np.subtract(a_null, lam.dot(J.dot(a_null)).dot(JMinv), out=self._Na)
-        np.add(X[0], self._Na, out=X[1])
-
-        # both candidates against every row at once: Z = [q̈, q, v, 1]·T
-        self._T_M[:] = M
-        hhat = self._hhat
-        hhat[:] = arm.h
-        Z = self._Y.dot(self._T)  # torque rows: τ_pre = M q̈ + h
-        if self.friction.active:  # ĥ = h + feed-forward of the final candidate's τ_pre
-            ff = self.friction(Z[1, 2 * n :], v, arm.h)
-            Z[:, 2 * n :] += ff
-            hhat += ff
-        within = np.abs(Z) <= self._half
-        # count_nonzero: a fraction of the cost of ndarray.all() on an array this small
-        if np.count_nonzero(within) == self._Z_rows and not self.solve_every_step:
-            self._fast_steps += 1
-            tau = Z[1, 2 * n :]  # M(q̈ + N a) + ĥ (a fresh array)
-        else:
-            tau = self._solve_levels(J, M, Minv, JMinv, lam, b, a_null, bool(within[0].all()))
-
+            tau = self._solve_levels(
+                J, M, Minv, self._JMinv, self._lam, self._b, self._a_null, status == K.SLOW_OK1
+            )
         if self.observer is not None:
             self.observer.command(tau)
-        k = self.steps
-        if k < self._rec_len:
-            self._rec[k] = (F, s, preload, w)
         self.steps = k + 1
         return tau
-
-    def _task_inertia(self, lam_inv: np.ndarray) -> np.ndarray:
-        """Λ from Λ⁻¹ = V diag(λ) Vᵀ (λ floored at λ_max/condition_threshold); writes
-        D_r into the buffer [D_r, K_r] (compute() keeps K_r = s·K0 there). Returns Λ.
-
-        D_r = Λ^½K_r^½ + K_r^½Λ^½ has entries (Λ^½)_ij (k_i + k_j), k = √s·√K0, so
-        D_r = √s·(Λ^½ ∘ P) with the constant P_ij = √K0_i + √K0_j.
-        """
-        eigval, V, _ = _dsyev(lam_inv)
-        values = eigval.tolist()  # Python floats: cheaper to compare than numpy scalars
-        top, low = values[-1], values[0]
-        if low * self.lambda_max_condition < top:  # a new largest condition number
-            self.lambda_max_condition = top / low if low > 0.0 else math.inf
-        if low * self.threshold < top:  # also when low ≤ 0
-            self._floor(eigval)
-        root = np.sqrt(eigval, out=eigval)
-        Vs = V / root  # V diag(λ^-½)
-        lam_sqrt = Vs.dot(V.T)  # Λ^½
-        D = self._D
-        np.multiply(lam_sqrt, self._P, out=D)  # D_r/√s
-        if _dpotrf(D.T)[1] != 0:  # not positive definite: damp each mode critically instead
-            self.modal_damping_steps += 1
-            D[:] = modal_damping(lam_sqrt, (V * root).dot(V.T), self.K0)
-        D *= self._sqrt_s
-        return Vs.dot(Vs.T)
-
-    def _floor(self, eigval: np.ndarray) -> None:
-        """Lift Λ⁻¹'s eigenvalues (ascending) to λ_max/threshold; count the step."""
-        top = eigval[-1]
-        self.lambda_floor_steps += 1
-        np.maximum(eigval, max(top, 1e-300) / self.threshold, out=eigval)
-
-    def _null_task(self, J, Minv, w: float, chol) -> np.ndarray:
-        """a_null = k_sa q̈_sa + k_ji q̈_ji (Eq. 38-42); q and v are in ``_Y`` already."""
-        a_null = self._a_null
-        np.dot(self._Y[0, self.n :], self._T_ji, out=a_null)  # k_ji q̈_ji
-        if w < self.manipulability_threshold and chol is not None and self.singularity_weight > 0.0:
-            self.singularity_steps += 1
-            direction = self._gradient(J, _dpotrs(chol, J)[0])  # ∇w/w
-            if self._inertia_metric:
-                direction = Minv.dot(direction)
-            norm = math.sqrt(direction.dot(direction))
-            if norm > 0.0:
-                a_null += (
-                    self.singularity_weight
-                    * (self.manipulability_threshold - w)
-                    / (self.manipulability_threshold * norm)
-                ) * direction
-        return a_null
 
     def _solve_levels(self, J, M, Minv, JMinv, lam, b, a_null, ok1: bool) -> np.ndarray:
         """The constrained path: the QP of each level whose closed form violates a row."""
