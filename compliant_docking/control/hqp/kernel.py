@@ -239,15 +239,18 @@ def hqp_step(J, M, Minv, h, q, v, Jdot_v, twist, pos, ref_twist, ref_pos, ref_ac
             eigval[i] = max(eigval[i], floor)
     for i in range(6):
         root[i] = np.sqrt(eigval[i])
-    # Λ^½ = V diag(λ^-½) Vᵀ, Λ = V diag(1/λ) Vᵀ; D_r/√s = Λ^½ ∘ P
+    # Λ^½ = Vs Vᵀ, Λ = Vs Vsᵀ with Vs = V diag(λ^-½); D_r/√s = Λ^½ ∘ P
+    Vs = _mat(ws, off, W_CHOL2, 6, 6)  # scratch (the back half uses it for a factor)
+    for i in range(6):
+        for c in range(6):
+            Vs[i, c] = V[i, c] / root[c]
     for i in range(6):
         for j in range(i, 6):
             t = 0.0
             u = 0.0
             for c in range(6):
-                vs_i = V[i, c] / root[c]
-                t += vs_i * V[j, c]
-                u += vs_i * (V[j, c] / root[c])
+                t += Vs[i, c] * V[j, c]
+                u += Vs[i, c] * Vs[j, c]
             lam_sqrt[i, j] = t
             lam_sqrt[j, i] = t
             lam[i, j] = u
