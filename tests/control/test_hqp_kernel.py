@@ -12,6 +12,8 @@ moves a result by ≫ 1e-6 relative.
 
 from __future__ import annotations
 
+import copy
+
 import numpy as np
 import pytest
 
@@ -65,6 +67,7 @@ def _check_steps(robot: str, *overrides: str, steps: int = 40, seed: int = 0, sl
     ramp = PreloadRamp(ctrl.preload.target, 1.0, 1.0)  # same target; its step below
     ramp.state[2] = ctrl.preload.state[2]
     seen = {"floored": 0, "modal": 0, "singular": 0, "fast": 0}
+    twin = None if ctrl.integral is None else copy.deepcopy(ctrl.integral)
     n = ctrl.n
     for k in range(steps):
         q = rng.uniform(np.maximum(arm.q_lower, -3.0), np.minimum(arm.q_upper, 3.0))
@@ -74,11 +77,8 @@ def _check_steps(robot: str, *overrides: str, steps: int = 40, seed: int = 0, sl
         ref = _random_reference(rng, arm)
         wrench = rng.normal(scale=2.0, size=6) if k % 3 else np.zeros(6)
         integral = (0.0, 0.0, 0.0)
-        if ctrl.integral is not None:  # the state the controller's integral will have
-            import copy
-
-            probe = copy.deepcopy(ctrl.integral)
-            integral = probe.update(ref.pos - arm.pos, wrench)
+        if twin is not None:  # the integral action the kernel runs, in Python
+            integral = twin.update(ref.pos - arm.pos, wrench)
         F = max(np.linalg.norm(wrench) - ctrl.deadband, 0.0)
         expected = reference_step(ctrl, arm, ref, wrench, ramp.update(F), integral)
         before = ctrl._fast_steps, ctrl.lambda_floor_steps, ctrl.modal_damping_steps, ctrl.singularity_steps
@@ -109,6 +109,10 @@ def _check_steps(robot: str, *overrides: str, steps: int = 40, seed: int = 0, sl
         ):
             cond = expected["cond"] if key in CONDITIONED else 0.0
             _close(actual, expected[key], key, cond, np.abs(expected["a_null"]).max() if key == "Na" else 0.0)
+        if twin is not None:  # kernel.integral_step and PositionIntegral: the same operations
+            ctrl._sync_integral()
+            assert ctrl.integral.diagnostics() == twin.diagnostics()
+            assert ctrl.integral.state == twin.state
         if fast:
             _close(tau, expected["Z"][1, 2 * n :], "tau", expected["cond"])
             _close(ctrl._Z, expected["Z"], "Z", expected["cond"])
@@ -133,6 +137,20 @@ def test_kernel_matches_the_reference_with_preload_integral_and_each_friction_mo
         "controller.contact_deadband=0.5",
         steps=30,
         seed=1,
+    )
+
+
+def test_kernel_integral_action_lateral_and_clamped():
+    """The integral action's other branches: lateral only, and a 0.05 N limit that clamps
+    after a few steps (its state and diagnostics compared exactly in _check_steps)."""
+    _check_steps(
+        "iiwa14",
+        "controller.integral_gain=2000",
+        "controller.integral_limit=0.05",
+        "controller.integral_lateral_only=true",
+        "controller.integral_freeze_force=3",
+        steps=30,
+        seed=4,
     )
 
 
@@ -169,12 +187,12 @@ def test_friction_twin_matches_the_numpy_feed_forward(mode):
 
 def test_cholesky_helpers_match_numpy_and_refuse_indefinite_matrices():
     rng = np.random.default_rng(8)
-    L = np.empty((6, 6))
+    L = np.zeros((6, 6))
     for _ in range(20):
         A = rng.normal(size=(6, 6))
         A = A @ A.T + 1e-3 * np.eye(6)
         assert K.cholesky(A, L)
-        np.testing.assert_allclose(L, np.linalg.cholesky(A), rtol=0, atol=1e-12 * np.abs(A).max())
+        np.testing.assert_allclose(np.tril(L), np.linalg.cholesky(A), rtol=0, atol=1e-12 * np.abs(A).max())
         x = rng.normal(size=6)
         expected = np.linalg.solve(A, x)
         K.cholesky_solve(L, x)

@@ -173,6 +173,16 @@ class HQPController(Controller):
             self.integral is not None,
             REGULARISER,
         )
+        if self.integral is not None:  # its update runs in the kernel (kernel.integral_step)
+            integral = self.integral
+            lateral = integral.axis is not None
+            cst[K.P_I_GAIN : K.P_I_LATERAL + 1] = (
+                integral.gain,
+                integral.limit,
+                integral.dt,
+                integral.freeze_sq,
+                lateral,
+            )
         parts = (self.K0, self._P, self.axis, self._T_ji, self._half, friction.f, friction.b, friction._scale)
         for start, part in zip(self._off, parts):
             cst[start : start + part.size] = part.reshape(-1)
@@ -187,7 +197,6 @@ class HQPController(Controller):
         self._a_null, self._Na = self._view(K.W_A_NULL, n), self._view(K.W_NA, n)
         self._Z = self._view(K.W_Z_ROWS, 2, 3 * n)
         self._tau_fast = self._Z[1, 2 * n :]  # the final candidate's torque rows
-        self._e_pos = np.zeros(3)  # x_d − x for the integral action
         # Load the compiled kernel now (0.2 s from numba's cache, ~12 s to compile after a
         # source change) rather than in the loop's first step: one call on the arm's current
         # state, with the argument types of the loop, into a scratch copy of the workspace.
@@ -275,9 +284,6 @@ class HQPController(Controller):
         constrained path in Python; the module doc gives the law."""
         arm = state
         w_ext = wrench if self.observer is None else self.observer.update(state, wrench)
-        if self.integral is not None:  # + [F_i; 0] (integral action, docs/controllers/integral.md)
-            np.subtract(ref.pos, arm.pos, out=self._e_pos)
-            self._ws[K.W_INTEGRAL : K.W_INTEGRAL + 3] = self.integral.update(self._e_pos, w_ext)
         rot_err = pin.log3(ref.rot.dot(arm.rot_T))  # log3(R_d Rᵀ) = −log3(R R_dᵀ)
         k = self.steps
         J, M, Minv = arm.J, arm.M, arm.Minv
@@ -366,7 +372,17 @@ class HQPController(Controller):
         return False
 
     # ------------------------------------------------------------------ after the run
+    def _sync_integral(self) -> None:
+        """Copy the integral action's state from the kernel's workspace into
+        ``self.integral`` (whose ``update`` the kernel replaces), for its diagnostics."""
+        if self.integral is not None:
+            ws, integral = self._ws, self.integral
+            integral.state = tuple(ws[K.W_I_STATE : K.W_I_STATE + 3].tolist())
+            integral.force = tuple(ws[K.W_INTEGRAL : K.W_INTEGRAL + 3].tolist())
+            integral.frozen_steps, integral.max_force = int(ws[K.W_I_FROZEN]), float(ws[K.W_I_MAX])
+
     def diagnostics(self) -> dict:
+        self._sync_integral()
         out = {
             "lambda_fallback_steps": self.lambda_floor_steps,
             "lambda_max_condition": float(self.lambda_max_condition),

@@ -1,19 +1,14 @@
-"""HQP-AC's per-step closed-form path, compiled (one kernel call per step).
+"""HQP-AC's per-step closed-form path, compiled: :func:`hqp_step` (one call per step) and the
+scalar pieces it shares with Python (stiffness scale, preload ramp, manipulability gradient).
 
-:func:`hqp_step` evaluates, from the arm's state, the reference and the wrench: the contact
-magnitude F, the stiffness scale s, the preload ramp, Λ⁻¹ = J M⁻¹ Jᵀ and its
-eigendecomposition (floored at cond ≤ condition_threshold), Λ^½, Λ, D_r (and its positive
-definiteness check), F_r with preload and integral force, b, the level-1 closed form (both
-null-space metrics), the manipulability w and its gradient, a_null, N a_null, the friction
-feed-forward, the 21 constraint rows of both candidates and the all-within check. It
-writes every intermediate the constrained path (``HQPController._solve_levels``, ProxQP,
-in Python) reads into one flat workspace ``ws`` whose views the controller holds
-(:func:`layout`). Constants (gains, limits, friction) are in one flat array ``cst``.
-
-Return codes: :data:`FAST` (both closed forms meet every row: τ = Z[1, 2n:]),
-:data:`SLOW` / :data:`SLOW_OK1` (some row violated; level 1's candidate meets its rows
-with SLOW_OK1 only), :data:`MODAL` (D_r of Eq. 29 is not positive definite: the caller
-writes the modal design into D_r/√s and finishes the step with :func:`hqp_back`).
+From the arm's state, the reference and the wrench: F, s, the preload, F_i, Λ⁻¹ = J M⁻¹ Jᵀ,
+its eigendecomposition (floored), Λ^½, Λ, D_r (PD check), F_r, b, level 1's closed form, w,
+∇w, a_null, N a_null, the friction feed-forward, both candidates' 21 rows and the check.
+Everything the constrained path (ProxQP, in Python) reads goes to the flat workspace ``ws``
+(views: :func:`layout`); constants are in the flat ``cst``. Returns :data:`FAST` (τ =
+Z[1, 2n:]), :data:`SLOW` / :data:`SLOW_OK1` (a row violated; level 1's candidate meets its
+rows with SLOW_OK1), or :data:`MODAL` (Eq. 29's D_r not PD: the caller writes the modal
+design into D_r/√s and finishes the step with :func:`hqp_back`).
 """
 
 from __future__ import annotations
@@ -29,16 +24,16 @@ FAST, SLOW, SLOW_OK1, MODAL = 0, 1, 2, 3
 # scalar parameters at the head of ``cst``
 P_DEADBAND, P_KMIN, P_KALPHA, P_THRESH, P_OMEGA, P_KSA = 0, 1, 2, 3, 4, 5
 P_INERTIA, P_USE_FF, P_FRICTION, P_FRICTION_MODE, P_EVERY, P_INTEGRAL, P_REG = 6, 7, 8, 9, 10, 11, 12
-N_PAR = 16
+P_I_GAIN, P_I_LIMIT, P_I_DT, P_I_FREEZE_SQ, P_I_LATERAL = 13, 14, 15, 16, 17  # integral action
+N_PAR = 18
 # scalar state and results at the head of ``ws``
 W_PRELOAD = 0  # 4 floats: value, in contact, step, target (compliance.preload_step)
 W_FLOOR, W_MAX_COND, W_SINGULAR, W_FAST = 4, 5, 6, 7  # counters and the largest cond(Λ⁻¹)
-W_F, W_S, W_W, W_SQRT_S, W_INTEGRAL = 8, 9, 10, 11, 12  # F, s, w, √s, [F_i] (3)
-N_SCALARS = 16
+W_F, W_S, W_W, W_SQRT_S, W_INTEGRAL = 8, 9, 10, 11, 12  # F, s, w, √s, F_i (3)
+W_I_STATE, W_I_FROZEN, W_I_MAX = 15, 18, 19  # the integral's ∫P e dt (3), frozen steps, max ‖F_i‖
+N_SCALARS = 20
 #: friction modes as the kernel numbers them (config.FrictionComp values)
 FRICTION_MODES = {"torque": 0, "velocity": 1, "torque_unbiased": 2}
-
-
 #: contact magnitude above which the preload ramps up [N] (CONTROL_LAWS.md §2)
 PRELOAD_CONTACT_N = 1.0
 #: contact magnitude below which the contact counts as lost again [N] (hysteresis)
@@ -50,11 +45,9 @@ PRELOAD_RELEASE_N = 0.5
 # only, so a compiled function in another file could change without recompiling it.
 @kernel
 def stiffness_scale(F, K_min_ratio, k_alpha):
-    """s with K_r = s·K0: s = clip(1 − α, K_min_ratio, 1), α = 1/(1 + exp(−k_alpha F)).
-
-    Element-wise clip((1 − α)K0, K_min_ratio K0, K0) equals s·K0 for K0 ≥ 0. s is 0.5 at
-    F = 0 and non-increasing in F (1 − α = 1/(1 + exp(k_alpha F))).
-    """
+    """s with K_r = s·K0: s = clip(1 − α, K_min_ratio, 1), α = 1/(1 + exp(−k_alpha F)) (equal
+    to the element-wise clip((1 − α)K0, K_min_ratio K0, K0) for K0 ≥ 0); 0.5 at F = 0 and
+    non-increasing in F (1 − α = 1/(1 + exp(k_alpha F)))."""
     x = k_alpha * F
     one_minus_alpha = 1.0 / (1.0 + math.exp(x)) if x < 700.0 else 0.0
     return min(max(one_minus_alpha, K_min_ratio), 1.0)
@@ -135,9 +128,33 @@ def _mat(a, off, field, rows, cols):
 
 
 @kernel
+def integral_step(cst, ws, wrench, e0, e1, e2, u0, u1, u2):
+    """control.integral.PositionIntegral.update, compiled (the same float operations in the
+    same order; the state in ws, the parameters in cst, u the docking axis)."""
+    f0, f1, f2 = wrench[0], wrench[1], wrench[2]
+    if f0 * f0 + f1 * f1 + f2 * f2 > cst[P_I_FREEZE_SQ]:
+        ws[W_I_FROZEN] += 1.0
+        return
+    if cst[P_I_LATERAL] != 0.0:  # drop the component along the docking axis
+        along = e0 * u0 + e1 * u1 + e2 * u2
+        e0, e1, e2 = e0 - along * u0, e1 - along * u1, e2 - along * u2
+    dt, gain = cst[P_I_DT], cst[P_I_GAIN]
+    s0, s1, s2 = ws[W_I_STATE] + dt * e0, ws[W_I_STATE + 1] + dt * e1, ws[W_I_STATE + 2] + dt * e2
+    size = gain * math.sqrt(s0 * s0 + s1 * s1 + s2 * s2)
+    if size > cst[P_I_LIMIT]:  # clamp the state with the force: no wind-up past the clamp
+        shrink = cst[P_I_LIMIT] / size
+        s0, s1, s2 = s0 * shrink, s1 * shrink, s2 * shrink
+        size = cst[P_I_LIMIT]
+    if size > ws[W_I_MAX]:
+        ws[W_I_MAX] = size
+    ws[W_I_STATE], ws[W_I_STATE + 1], ws[W_I_STATE + 2] = s0, s1, s2
+    ws[W_INTEGRAL], ws[W_INTEGRAL + 1], ws[W_INTEGRAL + 2] = gain * s0, gain * s1, gain * s2
+
+
+@kernel
 def cholesky(A, L):
-    """Lower Cholesky factor of the symmetric A (its lower triangle is read) into L; False
-    (as LAPACK dpotrf's info ≠ 0) when a pivot is not positive (or NaN)."""
+    """Lower Cholesky factor of the symmetric A (its lower triangle is read) into L's lower
+    triangle; False (as LAPACK dpotrf's info ≠ 0) when a pivot is not positive (or NaN)."""
     m = A.shape[0]
     for j in range(m):
         s = A[j, j]
@@ -152,8 +169,6 @@ def cholesky(A, L):
             for k in range(j):
                 t -= L[i, k] * L[j, k]
             L[i, j] = t / d
-        for i in range(j):
-            L[i, j] = 0.0
     return True
 
 
@@ -212,6 +227,10 @@ def hqp_step(J, M, Minv, h, q, v, Jdot_v, twist, pos, ref_twist, ref_pos, ref_ac
     for i in range(6):
         DK[6 + i, i] = s * K0[i]
     preload_step(ws[W_PRELOAD : W_PRELOAD + 4], F)
+    if cst[P_INTEGRAL] != 0.0:  # F_i from x_d − x (docs/controllers/integral.md)
+        a = off[C_AXIS]
+        e0, e1, e2 = ref_pos[0] - pos[0], ref_pos[1] - pos[1], ref_pos[2] - pos[2]
+        integral_step(cst, ws, wrench, e0, e1, e2, cst[a], cst[a + 1], cst[a + 2])
 
     # Λ⁻¹ = J M⁻¹ Jᵀ (symmetric by construction), its eigendecomposition and floor
     for i in range(6):
@@ -279,10 +298,9 @@ def hqp_back(J, M, Minv, h, q, v, Jdot_v, twist, pos, ref_twist, ref_pos, ref_ac
     preload = ws[W_PRELOAD]
     reg = cst[P_REG]
 
-    sqrt_s = ws[W_SQRT_S]
     for i in range(6):
         for j in range(6):
-            DK[i, j] *= sqrt_s
+            DK[i, j] *= ws[W_SQRT_S]
     # F_r = [D_r; K_r]ᵀ [ν_d − ν; x_d − x; log3(R_d Rᵀ)] + [F_i; 0] + p·[axis; 0]
     for i in range(6):
         z[i] = ref_twist[i] - twist[i]
@@ -294,12 +312,8 @@ def hqp_back(J, M, Minv, h, q, v, Jdot_v, twist, pos, ref_twist, ref_pos, ref_ac
         for i in range(12):
             t += z[i] * DK[i, j]
         F_r[j] = t
-    if cst[P_INTEGRAL] != 0.0:
-        for i in range(3):
-            F_r[i] += ws[W_INTEGRAL + i]
-    if preload != 0.0:
-        for i in range(3):
-            F_r[i] += preload * cst[off[C_AXIS] + i]
+    for i in range(3):  # F_i (0 when off) and the preload along the axis
+        F_r[i] += ws[W_INTEGRAL + i] + preload * cst[off[C_AXIS] + i]
     # b = Λ⁻¹F_r + ν̇_d − J̇v
     for i in range(6):
         t = 0.0
