@@ -21,12 +21,12 @@ What stays in Python, every step or on some steps:
   ``NEEDS_SOLVE`` and ``TaskInertia.solve`` takes the step, so dposv decides as on main (it
   fails on the same pivots, then the damped pseudo-inverse follows).
 
-Twins of numpy formulas used by other laws (tests/control/test_se3_kernel.py checks them on
-random inputs against the numpy pieces): the Cholesky solve (``dposv``), the friction
-feed-forward (``FrictionFeedForward.__call__``, all three modes) and the apparent-inertia
-floor's refresh (``ApparentInertiaFloor.refresh``: its ``dpotrf`` test by the same Cholesky,
-its ``dsyevd`` by numba's ``np.linalg.eigh``, LAPACK's ``dsyevd`` as well). log3 and J(w)⁻¹'s
-coefficients are lie's own functions compiled, not copies.
+The Cholesky solve (twin of ``dposv``) and the friction feed-forward are the shared blocks
+of :mod:`~.kernel_blocks`. The apparent-inertia floor's refresh is a twin of
+``ApparentInertiaFloor.refresh`` (its ``dpotrf`` test by the same Cholesky, its ``dsyevd`` by
+numba's ``np.linalg.eigh``, LAPACK's ``dsyevd`` as well; tests/control/test_se3_kernel.py
+checks it against the numpy piece). log3 and J(w)⁻¹'s coefficients are lie's own functions
+compiled, not copies.
 """
 
 from __future__ import annotations
@@ -36,6 +36,12 @@ import math
 import numpy as np
 
 from compliant_docking.control.jit import kernel
+from compliant_docking.control.kernel_blocks import (
+    cholesky,
+    cholesky_solve,
+    friction_code,
+    friction_feed_forward,
+)
 from compliant_docking.control.lie.series import PI_MARGIN, inv_coefficients
 from compliant_docking.control.lie.so3 import log3_list
 from compliant_docking.planning.base import Reference
@@ -50,8 +56,6 @@ OUT_OF_DOMAIN = 2  # ‖λ_rot‖ ≥ π − PI_MARGIN: mem[LAM+3:LAM+6] is λ_r
 FLIPPED = 3  # λ_rot flipped through π within one step: mem[WPREV:WPREV+3] the previous λ_rot
 # modes
 FULL, STAGE = 0, 1
-# friction modes in par[FRICTION_MODE]
-TORQUE, VELOCITY, TORQUE_UNBIASED = 0.0, 1.0, 2.0
 
 # par (constant): gains, flags, friction parameters
 K_DIAG, G_INV, G_D, F_D = 0, 6, 12, 18
@@ -75,57 +79,7 @@ def mem_size(nv: int) -> int:
     return TAU + nv
 
 
-@kernel
-def friction_feedforward(mode, f, b, scale, tau_pre, v, bias, out):
-    """Twin of ``FrictionFeedForward.__call__``: out = f·tanh(x·scale) + b·v with x = τ_pre − h
-    (torque_unbiased), τ_pre (torque) or v (velocity)."""
-    for j in range(len(out)):
-        if mode == TORQUE_UNBIASED:
-            x = (tau_pre[j] - bias[j]) * scale[j]
-        elif mode == TORQUE:
-            x = tau_pre[j] * scale[j]
-        else:
-            x = v[j] * scale[j]
-        out[j] = math.tanh(x) * f[j] + b[j] * v[j]
 
-
-@kernel
-def cholesky6(S, L):
-    """L, the Cholesky factor of a 6×6 S (lower triangle read), as LAPACK ``dpotrf``; False
-    when a pivot is not positive (or NaN): S not positive definite."""
-    for j in range(6):
-        s = S[j, j]
-        for m in range(j):
-            s -= L[j, m] * L[j, m]
-        if not s > 0.0:
-            return False
-        d = math.sqrt(s)
-        L[j, j] = d
-        for i in range(j + 1, 6):
-            s = S[i, j]
-            for m in range(j):
-                s -= L[i, m] * L[j, m]
-            L[i, j] = s / d
-    return True
-
-
-@kernel
-def cholesky_solve6(S, rhs, L, x):
-    """Twin of LAPACK ``dposv`` on a 6×6 S (lower triangle read): x = S⁻¹rhs, L the factor.
-    Returns False when a pivot is not positive (or NaN): S not positive definite."""
-    if not cholesky6(S, L):
-        return False
-    for i in range(6):  # L y = rhs
-        s = rhs[i]
-        for m in range(i):
-            s -= L[i, m] * x[m]
-        x[i] = s / L[i, i]
-    for i in range(5, -1, -1):  # Lᵀ x = y
-        s = x[i]
-        for m in range(i + 1, 6):
-            s -= L[m, i] * x[m]
-        x[i] = s / L[i, i]
-    return True
 
 
 @kernel
@@ -138,7 +92,7 @@ def floor_refresh(S, w_sqrt, w_isqrt, ratio, PI, mem):
         for j in range(6):
             T[j, i] = S[i, j] * (w_sqrt[i] * w_sqrt[j])
             U[j, i] = T[j, i] - ratio if i == j else T[j, i]
-    if cholesky6(U, np.empty((6, 6))):  # every 1/σ > ratio: nothing to do
+    if cholesky(U, np.empty((6, 6))):  # every 1/σ > ratio: nothing to do
         return False
     if not np.all(np.isfinite(T)):  # (dsyevd's failure in numpy: P None)
         return False
@@ -324,8 +278,10 @@ def step(mode, k, refresh, Rd, pd, Vd, Ad, R, p, tw, jdv, J, Minv, M, v, h, wren
     # --- Λ(V̇_ref − J̇_b v + bV) by Cholesky of Λ⁻¹
     L = np.empty((6, 6))
     x = np.empty(6)
-    if not cholesky_solve6(S, mem[A:A + 6], L, x):
+    if not cholesky(S, L):
         return NEEDS_SOLVE
+    x[:] = mem[A:A + 6]
+    cholesky_solve(L, x)
     finish(x, M, v, h, par, mem, work)
     return DONE
 
@@ -349,9 +305,8 @@ def finish(x, M, v, h, par, mem, work):
         tau[c] = s + h[c] - bn * mv
     if par[FRICTION_ON] != 0.0:
         ff = np.empty(nv)
-        friction_feedforward(par[FRICTION_MODE], par[FRICTION:FRICTION + nv],
-                             par[FRICTION + nv:FRICTION + 2 * nv],
-                             par[FRICTION + 2 * nv:FRICTION + 3 * nv], tau, v, h, ff)
+        friction_feed_forward(tau, v, h, par[FRICTION:FRICTION + nv], par[FRICTION + nv:FRICTION + 2 * nv],
+                              par[FRICTION + 2 * nv:FRICTION + 3 * nv], int(par[FRICTION_MODE]), ff)
         for c in range(nv):
             tau[c] += ff[c]
 
@@ -372,7 +327,7 @@ class TwistKernel:
         par[HAS_F_D] = float(bool(np.any(ctrl.desired_wrench)))
         par[FORCE_FEEDBACK] = float(ctrl.use_force_feedback)
         par[FRICTION_ON] = float(fr.active)
-        par[FRICTION_MODE] = (TORQUE_UNBIASED if fr._unbiased else TORQUE if fr._torque_mode else VELOCITY)
+        par[FRICTION_MODE] = friction_code(fr.mode)
         par[FRICTION:] = np.concatenate([fr.f, fr.b, fr._scale])
         if floor is not None:
             par[FLOOR], par[FLOOR_RATIO] = 1.0, floor.ratio

@@ -18,8 +18,6 @@ import numpy as np
 import pytest
 
 from compliant_docking.config import FrictionComp
-from compliant_docking.control.base import FrictionFeedForward
-from compliant_docking.control.hqp import kernel as K
 from compliant_docking.control.hqp.compliance import PreloadRamp
 from compliant_docking.planning.base import Reference
 from compliant_docking.sim.simulate import prepare
@@ -165,38 +163,3 @@ def test_kernel_modal_damping_branch():
     posture: the modal design written back from Python, then the rest of the kernel."""
     seen = _check_steps("iiwa14", "controller.K0=[1e5,1e5,1e5,0.1,0.1,0.1]", steps=20, seed=3)
     assert seen["modal"] > 10
-
-
-@pytest.mark.parametrize("mode", list(FrictionComp))
-def test_friction_twin_matches_the_numpy_feed_forward(mode):
-    """The kernel's copy of control.base.FrictionFeedForward (the impedance law's, kept in
-    numpy): same formula, so the same values to 1e-12 relative (tanh of libm vs numpy)."""
-    rng = np.random.default_rng(7)
-    n = 7
-    f = rng.uniform(0.0, 2.0, n)
-    f[2] = 0.0  # a joint without friction
-    b = rng.uniform(0.0, 1.0, n)
-    ff = FrictionFeedForward(f, b, mode)
-    for _ in range(50):
-        tau, v, h = rng.normal(scale=5.0, size=(3, n))
-        out = np.empty(n)
-        K.friction_feed_forward(tau, v, h, ff.f, ff.b, ff._scale, K.FRICTION_MODES[mode.value], out)
-        expected = ff(tau.copy(), v, h)
-        np.testing.assert_allclose(out, expected, rtol=1e-12, atol=1e-15)
-
-
-def test_cholesky_helpers_match_numpy_and_refuse_indefinite_matrices():
-    rng = np.random.default_rng(8)
-    L = np.zeros((6, 6))
-    for _ in range(20):
-        A = rng.normal(size=(6, 6))
-        A = A @ A.T + 1e-3 * np.eye(6)
-        assert K.cholesky(A, L)
-        np.testing.assert_allclose(np.tril(L), np.linalg.cholesky(A), rtol=0, atol=1e-12 * np.abs(A).max())
-        x = rng.normal(size=6)
-        expected = np.linalg.solve(A, x)
-        K.cholesky_solve(L, x)
-        np.testing.assert_allclose(x, expected, rtol=0, atol=1e-9 * np.abs(expected).max())
-    A = np.diag([1.0, 2.0, -1e-12, 1.0, 1.0, 1.0])
-    assert not K.cholesky(A, L)
-    assert not K.cholesky(np.full((6, 6), np.nan), L)

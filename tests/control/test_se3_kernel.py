@@ -17,11 +17,9 @@ import numpy as np
 import pinocchio as pin
 import pytest
 from omegaconf import OmegaConf
-from scipy.linalg import lapack
 
 from compliant_docking.config import FrictionComp
 from compliant_docking.control import se3_kernel
-from compliant_docking.control.base import FrictionFeedForward
 from compliant_docking.control.se3_lie import SE3LieController
 from compliant_docking.control.shaping import ApparentInertiaFloor
 from compliant_docking.planning.base import Reference
@@ -34,44 +32,6 @@ REL = 1e-9
 
 def close(a, b, rel):
     return np.max(np.abs(np.asarray(a) - np.asarray(b))) <= rel * max(1.0, np.max(np.abs(b)))
-
-
-@pytest.mark.parametrize("mode", list(FrictionComp))
-def test_friction_twin_matches_the_numpy_feedforward(mode):
-    rng = np.random.default_rng(4)
-    f = rng.uniform(0.0, 1.2, 7)
-    f[2] = 0.0  # a joint without friction: scale 1 in the torque modes
-    b = rng.uniform(0.0, 0.5, 7)
-    ff = FrictionFeedForward(f, b, mode)
-    code = {
-        FrictionComp.torque: se3_kernel.TORQUE,
-        FrictionComp.velocity: se3_kernel.VELOCITY,
-        FrictionComp.torque_unbiased: se3_kernel.TORQUE_UNBIASED,
-    }[mode]
-    for _ in range(20):
-        tau, v, h = rng.uniform(-3, 3, 7), rng.uniform(-0.05, 0.05, 7), rng.uniform(-3, 3, 7)
-        out = np.zeros(7)
-        se3_kernel.friction_feedforward(code, f, b, ff._scale, tau, v, h, out)
-        assert close(out, ff(tau, v, h), 1e-12)
-
-
-def test_cholesky_twin_matches_dposv():
-    rng = np.random.default_rng(7)
-    L, x = np.zeros((6, 6)), np.zeros(6)
-    for _ in range(50):
-        B = rng.standard_normal((6, 6))
-        S = B @ B.T + 0.5 * np.eye(6)
-        rhs = rng.standard_normal(6)
-        assert se3_kernel.cholesky_solve6(S, rhs, L, x)
-        _, ref, info = lapack.dposv(S, rhs)
-        assert info == 0 and close(x, ref, 1e-12)
-    # not positive definite (a negative, a zero pivot): refused, as dposv refuses
-    for bad in (np.diag([1.0, 1.0, -1.0, 1.0, 1.0, 1.0]), np.diag([1.0, 0.0, 1, 1, 1, 1])):
-        assert not se3_kernel.cholesky_solve6(bad, np.ones(6), L, x)
-        assert lapack.dposv(bad, np.ones(6))[2] != 0
-    # a NaN pivot: refused too (OpenBLAS's dposv lets it through); the step then goes to
-    # TaskInertia.solve, so the outcome is dposv's either way
-    assert not se3_kernel.cholesky_solve6(np.diag([1.0, 1, 1, np.nan, 1, 1]), np.ones(6), L, x)
 
 
 def _pair(sim):

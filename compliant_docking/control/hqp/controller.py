@@ -49,6 +49,7 @@ from compliant_docking.control.base import Controller, vector_setting
 from compliant_docking.control.hqp.compliance import PreloadRamp, modal_damping
 from compliant_docking.control.hqp.manipulability import check_revolute_chain
 from compliant_docking.control.hqp.qp_level import QPLevel
+from compliant_docking.control.kernel_blocks import friction_code
 from compliant_docking.control.observer import MomentumObserver
 from compliant_docking.planning.base import Reference
 from compliant_docking.sim.context import ControlContext
@@ -168,7 +169,7 @@ class HQPController(Controller):
             self._inertia_metric,
             self.use_force_feedback,
             friction.active,
-            K.FRICTION_MODES[friction.mode.value],
+            friction_code(friction.mode),
             self.solve_every_step,
             self.integral is not None,
             REGULARISER,

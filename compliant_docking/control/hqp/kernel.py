@@ -18,6 +18,7 @@ import math
 import numpy as np
 
 from compliant_docking.control.jit import kernel
+from compliant_docking.control.kernel_blocks import cholesky, cholesky_solve, friction_feed_forward
 
 FAST, SLOW, SLOW_OK1, MODAL = 0, 1, 2, 3
 
@@ -32,17 +33,14 @@ W_FLOOR, W_MAX_COND, W_SINGULAR, W_FAST = 4, 5, 6, 7  # counters and the largest
 W_F, W_S, W_W, W_SQRT_S, W_INTEGRAL = 8, 9, 10, 11, 12  # F, s, w, √s, F_i (3)
 W_I_STATE, W_I_FROZEN, W_I_MAX = 15, 18, 19  # the integral's ∫P e dt (3), frozen steps, max ‖F_i‖
 N_SCALARS = 20
-#: friction modes as the kernel numbers them (config.FrictionComp values)
-FRICTION_MODES = {"torque": 0, "velocity": 1, "torque_unbiased": 2}
 #: contact magnitude above which the preload ramps up [N] (CONTROL_LAWS.md §2)
 PRELOAD_CONTACT_N = 1.0
 #: contact magnitude below which the contact counts as lost again [N] (hysteresis)
 PRELOAD_RELEASE_N = 0.5
 
 
-# The law's scalar pieces live here, with the step kernel, and compliance.py and
-# manipulability.py import them: numba's cache checks the calling kernel's source file
-# only, so a compiled function in another file could change without recompiling it.
+# The law's scalar pieces, compiled once: the step kernel calls them, and compliance.py and
+# manipulability.py import them for Python's use.
 @kernel
 def stiffness_scale(F, K_min_ratio, k_alpha):
     """s with K_r = s·K0: s = clip(1 − α, K_min_ratio, 1), α = 1/(1 + exp(−k_alpha F)) (equal
@@ -149,57 +147,6 @@ def integral_step(cst, ws, wrench, e0, e1, e2, u0, u1, u2):
         ws[W_I_MAX] = size
     ws[W_I_STATE], ws[W_I_STATE + 1], ws[W_I_STATE + 2] = s0, s1, s2
     ws[W_INTEGRAL], ws[W_INTEGRAL + 1], ws[W_INTEGRAL + 2] = gain * s0, gain * s1, gain * s2
-
-
-@kernel
-def cholesky(A, L):
-    """Lower Cholesky factor of the symmetric A (its lower triangle is read) into L's lower
-    triangle; False (as LAPACK dpotrf's info ≠ 0) when a pivot is not positive (or NaN)."""
-    m = A.shape[0]
-    for j in range(m):
-        s = A[j, j]
-        for k in range(j):
-            s -= L[j, k] * L[j, k]
-        if not s > 0.0:
-            return False
-        d = math.sqrt(s)
-        L[j, j] = d
-        for i in range(j + 1, m):
-            t = A[i, j]
-            for k in range(j):
-                t -= L[i, k] * L[j, k]
-            L[i, j] = t / d
-    return True
-
-
-@kernel
-def cholesky_solve(L, x):
-    """x ← (L Lᵀ)⁻¹ x in place."""
-    m = L.shape[0]
-    for i in range(m):
-        t = x[i]
-        for k in range(i):
-            t -= L[i, k] * x[k]
-        x[i] = t / L[i, i]
-    for i in range(m - 1, -1, -1):
-        t = x[i]
-        for k in range(i + 1, m):
-            t -= L[k, i] * x[k]
-        x[i] = t / L[i, i]
-
-
-@kernel
-def friction_feed_forward(tau_pre, v, h, f, b, scale, mode, out):
-    """control.base.FrictionFeedForward's torque, compiled (mode: FRICTION_MODES):
-    f·tanh(x) + b·v with x = 2τ_pre/f, v/0.01 or 2(τ_pre − h)/f (``scale`` holds the factor)."""
-    for i in range(out.shape[0]):
-        if mode == 1:
-            x = v[i] * scale[i]
-        elif mode == 2:
-            x = (tau_pre[i] - h[i]) * scale[i]
-        else:
-            x = tau_pre[i] * scale[i]
-        out[i] = np.tanh(x) * f[i] + b[i] * v[i]
 
 
 @kernel

@@ -1,0 +1,75 @@
+"""Compiled building blocks shared by the step kernels (:mod:`~.se3_kernel`,
+:mod:`~.hqp.kernel`): a Cholesky factorization and solve that report failure as LAPACK does,
+and the friction feed-forward.
+
+Each is the compiled twin of a numpy/LAPACK piece that the numpy laws (impedance) keep
+using; tests/control/test_kernel_blocks.py checks every twin against its original on random
+inputs.
+"""
+
+from __future__ import annotations
+
+import math
+
+from compliant_docking.config import FrictionComp
+from compliant_docking.control.jit import kernel
+
+#: friction modes as the kernels number them
+FRICTION_CODES = {FrictionComp.torque: 0, FrictionComp.velocity: 1, FrictionComp.torque_unbiased: 2}
+
+
+def friction_code(mode: FrictionComp | str) -> int:
+    """The kernels' number for a ``friction_comp`` mode."""
+    return FRICTION_CODES[FrictionComp(mode)]
+
+
+@kernel
+def cholesky(A, L):
+    """Lower Cholesky factor of the symmetric A (its lower triangle is read) into L's lower
+    triangle; False (as LAPACK dpotrf's info ≠ 0) when a pivot is not positive (or NaN)."""
+    m = A.shape[0]
+    for j in range(m):
+        s = A[j, j]
+        for k in range(j):
+            s -= L[j, k] * L[j, k]
+        if not s > 0.0:
+            return False
+        d = math.sqrt(s)
+        L[j, j] = d
+        for i in range(j + 1, m):
+            t = A[i, j]
+            for k in range(j):
+                t -= L[i, k] * L[j, k]
+            L[i, j] = t / d
+    return True
+
+
+@kernel
+def cholesky_solve(L, x):
+    """x ← (L Lᵀ)⁻¹ x in place, L from :func:`cholesky`."""
+    m = L.shape[0]
+    for i in range(m):
+        t = x[i]
+        for k in range(i):
+            t -= L[i, k] * x[k]
+        x[i] = t / L[i, i]
+    for i in range(m - 1, -1, -1):
+        t = x[i]
+        for k in range(i + 1, m):
+            t -= L[k, i] * x[k]
+        x[i] = t / L[i, i]
+
+
+@kernel
+def friction_feed_forward(tau_pre, v, h, f, b, scale, mode, out):
+    """Twin of ``control.base.FrictionFeedForward.__call__`` (mode: :data:`FRICTION_CODES`):
+    out = f·tanh(x) + b·v with x = 2τ_pre/f (torque), v/0.01 (velocity) or 2(τ_pre − h)/f
+    (torque_unbiased); ``scale`` holds the factor of each mode."""
+    for i in range(out.shape[0]):
+        if mode == 1:
+            x = v[i] * scale[i]
+        elif mode == 2:
+            x = (tau_pre[i] - h[i]) * scale[i]
+        else:
+            x = tau_pre[i] * scale[i]
+        out[i] = math.tanh(x) * f[i] + b[i] * v[i]
