@@ -304,8 +304,9 @@ def hqp_back(J, M, Minv, h, q, v, Jdot_v, twist, pos, ref_twist, ref_pos, ref_ac
                 for i in range(6):
                     t += y[i] * J[i, c]
                 X0[c] = t
-    else:
-        X0[:] = np.linalg.lstsq(J, b, 2.220446049250313e-16 * max(6, n))[0]
+    else:  # J Jᵀ + εI is PD for every finite J: J is not finite, so neither is τ, and the
+        # loop stops the run with "the controller returned a non-finite torque"
+        X0[:] = np.nan
     for c in range(n):
         Y[0, n + c] = Y[1, n + c] = q[c]
         Y[0, 2 * n + c] = Y[1, 2 * n + c] = v[c]
