@@ -292,18 +292,15 @@ def hqp_back(J, M, Minv, h, q, v, Jdot_v, twist, pos, ref_twist, ref_pos, ref_ac
                 JJ[i, i] += reg
             cholesky(JJ, L2)  # Λ⁻¹ + εI is PD whenever J Jᵀ + εI is
             cholesky_solve(L2, y)
-            for c in range(n):
-                t = 0.0
-                for i in range(6):
-                    t += y[i] * JMinv[i, c]
-                X0[c] = t
+            rows = JMinv  # q̈ = (J M⁻¹)ᵀy
         else:
             cholesky_solve(L, y)
-            for c in range(n):
-                t = 0.0
-                for i in range(6):
-                    t += y[i] * J[i, c]
-                X0[c] = t
+            rows = J  # q̈ = Jᵀy
+        for c in range(n):
+            t = 0.0
+            for i in range(6):
+                t += y[i] * rows[i, c]
+            X0[c] = t
     else:  # J Jᵀ + εI is PD for every finite J: J is not finite, so neither is τ, and the
         # loop stops the run with "the controller returned a non-finite torque"
         X0[:] = np.nan
