@@ -163,3 +163,18 @@ def test_kernel_modal_damping_branch():
     posture: the modal design written back from Python, then the rest of the kernel."""
     seen = _check_steps("iiwa14", "controller.K0=[1e5,1e5,1e5,0.1,0.1,0.1]", steps=20, seed=3)
     assert seen["modal"] > 10
+
+
+def test_a_non_finite_state_gives_a_non_finite_torque_not_an_exception():
+    """As the numpy law did: τ is NaN, and the loop stops the run as diverged with its own
+    message (numba's eigh would raise "Array must not contain infs or NaNs" instead)."""
+    sim = prepare(make_cfg("robot=fr3", "controller=hqp"))
+    arm, ctrl = sim.scene.arm, sim.controller
+    ref = Reference()
+    sim.planner.sample(0.0, ref)
+    q = sim.q0.copy()
+    q[2] = np.nan
+    arm.update(q, np.zeros(arm.nv))
+    tau = ctrl.compute(0.0, arm, ref, np.zeros(6))
+    assert tau.shape == (arm.nv,) and np.isnan(tau).all()
+    assert ctrl.steps == 1

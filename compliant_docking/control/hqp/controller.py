@@ -302,6 +302,8 @@ class HQPController(Controller):
             )  # fmt: skip
         if status == K.FAST:
             tau = self._tau_fast.copy()  # M(q̈ + N a) + ĥ
+        elif status == K.NOT_FINITE:  # q or v not finite: so is τ, and the loop stops the run
+            tau = np.full(self.n, np.nan)  # as diverged ("the controller returned a non-finite torque")
         else:
             tau = self._solve_levels(
                 J, M, Minv, self._JMinv, self._lam, self._b, self._a_null, status == K.SLOW_OK1

@@ -7,8 +7,10 @@ its eigendecomposition (floored), Λ^½, Λ, D_r (PD check), F_r, b, level 1's c
 Everything the constrained path (ProxQP, in Python) reads goes to the flat workspace ``ws``
 (views: :func:`layout`); constants are in the flat ``cst``. Returns :data:`FAST` (τ =
 Z[1, 2n:]), :data:`SLOW` / :data:`SLOW_OK1` (a row violated; level 1's candidate meets its
-rows with SLOW_OK1), or :data:`MODAL` (Eq. 29's D_r not PD: the caller writes the modal
-design into D_r/√s and finishes the step with :func:`hqp_back`).
+rows with SLOW_OK1), :data:`MODAL` (Eq. 29's D_r not PD: the caller writes the modal
+design into D_r/√s and finishes the step with :func:`hqp_back`) or :data:`NOT_FINITE` (Λ⁻¹
+not finite, from a non-finite state: no step; the caller returns a NaN torque, as the numpy
+law did, and the loop stops the run as diverged).
 """
 
 from __future__ import annotations
@@ -20,7 +22,7 @@ import numpy as np
 from compliant_docking.control.jit import kernel
 from compliant_docking.control.kernel_blocks import cholesky, cholesky_solve, friction_feed_forward
 
-FAST, SLOW, SLOW_OK1, MODAL = 0, 1, 2, 3
+FAST, SLOW, SLOW_OK1, MODAL, NOT_FINITE = 0, 1, 2, 3, 4
 
 # scalar parameters at the head of ``cst``
 P_DEADBAND, P_KMIN, P_KALPHA, P_THRESH, P_OMEGA, P_KSA = 0, 1, 2, 3, 4, 5
@@ -193,6 +195,8 @@ def hqp_step(J, M, Minv, h, q, v, Jdot_v, twist, pos, ref_twist, ref_pos, ref_ac
                 t += JMinv[i, c] * J[j, c]
             lam_inv[i, j] = t
             lam_inv[j, i] = t
+    if not np.all(np.isfinite(lam_inv)):  # a non-finite state: no step (eigh would raise)
+        return NOT_FINITE
     eigval, vectors = np.linalg.eigh(lam_inv)
     V[:, :] = vectors
     top, low = eigval[5], eigval[0]
@@ -301,8 +305,7 @@ def hqp_back(J, M, Minv, h, q, v, Jdot_v, twist, pos, ref_twist, ref_pos, ref_ac
             for i in range(6):
                 t += y[i] * rows[i, c]
             X0[c] = t
-    else:  # J Jᵀ + εI is PD for every finite J: J is not finite, so neither is τ, and the
-        # loop stops the run with "the controller returned a non-finite torque"
+    else:  # J Jᵀ + εI is PD for every finite J (a non-finite one returned above)
         X0[:] = np.nan
     for c in range(n):
         Y[0, n + c] = Y[1, n + c] = q[c]
