@@ -39,8 +39,9 @@ TRACKING = "compliant_docking/evaluation/tracking_gate.py"
 SENSOR = "compliant_docking/sim/sensor.py"
 IMPEDANCE = "compliant_docking/control/impedance.py"
 SE3_LIE = "compliant_docking/control/se3_lie.py"
-HQP = "compliant_docking/control/hqp/controller.py"
-COMPLIANCE = "compliant_docking/control/hqp/compliance.py"
+HQP_KERNEL = "compliant_docking/control/hqp/kernel.py"
+SE3_KERNEL = "compliant_docking/control/se3_kernel.py"
+KERNEL_BLOCKS = "compliant_docking/control/kernel_blocks.py"
 BASE = "compliant_docking/control/base.py"
 SHAPING = "compliant_docking/control/shaping.py"
 INTEGRAL = "compliant_docking/control/integral.py"
@@ -479,7 +480,7 @@ MUTATIONS = (
     ),
     Mutation(
         "C9",
-        COMPLIANCE,
+        HQP_KERNEL,
         "one_minus_alpha = 1.0 / (1.0 + math.exp(x))",
         "one_minus_alpha = 1.0 / (1.0 + math.exp(-x))",
         "HQP stiffness rises with force (α for 1 − α)",
@@ -487,7 +488,7 @@ MUTATIONS = (
     ),
     Mutation(
         "C10",
-        COMPLIANCE,
+        HQP_KERNEL,
         "return min(max(one_minus_alpha, K_min_ratio), 1.0)",
         "return min(one_minus_alpha, 1.0)",
         "HQP K_min clip removed",
@@ -495,9 +496,9 @@ MUTATIONS = (
     ),
     Mutation(
         "C11",
-        HQP,
-        "        D *= math.sqrt(s)\n",
-        "        D *= 0.5 * math.sqrt(s)\n",
+        HQP_KERNEL,
+        "            DK[i, j] *= ws[W_SQRT_S]\n",
+        "            DK[i, j] *= 0.5 * ws[W_SQRT_S]\n",
         "HQP damping halved",
         LAW_TESTS,
     ),
@@ -532,6 +533,31 @@ MUTATIONS = (
         "            x = tau_pre + 0.0 * bias",
         "torque_unbiased ignores the bias torques",
         LAW_TESTS,
+    ),
+    # the compiled steps (issue 12): each is checked against a numpy evaluation
+    Mutation(
+        "C16",
+        KERNEL_BLOCKS,
+        "        out[i] = math.tanh(x) * f[i] + b[i] * v[i]",
+        "        out[i] = -math.tanh(x) * f[i] + b[i] * v[i]",
+        "compiled friction feed-forward against the motion",
+        ("tests/control/test_kernel_blocks.py", *LAW_TESTS),
+    ),
+    Mutation(
+        "C17",
+        SE3_KERNEL,
+        "        tau[c] = s + h[c] - bn * mv",
+        "        tau[c] = s + h[c] + bn * mv",
+        "compiled SE(3) step: null-space damping pumps energy in",
+        ("tests/control/test_se3_kernel.py", *LAW_TESTS),
+    ),
+    Mutation(
+        "C18",
+        HQP_KERNEL,
+        "                a_null[i] += gain * direction[i]",
+        "                a_null[i] -= gain * direction[i]",
+        "compiled HQP step: singularity avoidance steers toward the singularity",
+        ("tests/control/test_hqp_kernel.py", *LAW_TESTS),
     ),
     # ---------------------------------------------------------------- provenance, exit status
     Mutation(
