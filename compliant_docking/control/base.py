@@ -99,12 +99,22 @@ class TaskInertia:
         self._step = 0
         self._ill = False
 
+    def due(self) -> bool:
+        """Whether this step's solve checks the condition number (every ``check_every``
+        steps, and every step while above the threshold)."""
+        return self._ill or self._step % self.check_every == 0
+
+    def count_unchecked(self) -> None:
+        """Count a step that was not :meth:`due` and whose Λ solve ran elsewhere (a compiled
+        step's own Cholesky), so that the check schedule stays the one :meth:`solve` keeps."""
+        self._step += 1
+
     def solve(self, J: np.ndarray, JMinv: np.ndarray, rhs: np.ndarray) -> np.ndarray:
         """Λ·rhs for a vector (6) or a matrix (6×k), given J and J M⁻¹ of this step."""
         # The transpose of the symmetric product is Fortran-ordered: LAPACK works on it
         # in place, without a copy.
         lam_inv = JMinv.dot(J.T).T
-        check = self._ill or self._step % self.check_every == 0
+        check = self.due()
         self._step += 1
         if check:
             anorm = lapack.dlange("1", lam_inv)

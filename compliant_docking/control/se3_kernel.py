@@ -79,9 +79,6 @@ def mem_size(nv: int) -> int:
     return TAU + nv
 
 
-
-
-
 @kernel
 def floor_refresh(S, w_sqrt, w_isqrt, ratio, PI, mem):
     """Twin of ``ApparentInertiaFloor.refresh`` for Λ⁻¹ = S: P = W_eff⁻¹W into PI[:, :6] and
@@ -364,8 +361,8 @@ class TwistKernel:
             F_i = integral.update(self._err, wrench)
         # steps with TaskInertia's condition-number check end in numpy (staged); the floor's
         # refresh runs in the kernel; the counters of both objects are advanced here
-        staged = ti._ill or ti._step % ti.check_every == 0
-        refresh = floor is not None and floor._step % floor.every == 0
+        staged = ti.due()
+        refresh = floor is not None and floor.due()
         k = ctrl._k
         ctrl._k = k + 1
         status = step(STAGE if staged else FULL, k, refresh, ref.rot, ref.pos, ref.twist,
@@ -377,13 +374,10 @@ class TwistKernel:
                                      mem[WPREV:WPREV + 3].tolist(), status == FLIPPED)
         if floor is not None:  # ApparentInertiaFloor.current's bookkeeping
             if refresh:
-                floor.P = self.PI[:, :6].copy() if mem[FLOOR_ACTIVE] else None
-                floor.max_ratio = float(mem[FLOOR_MAX_RATIO])
-            floor._step += 1
-            if floor.P is not None:
-                floor.active_steps += 1
+                floor.refreshed_elsewhere(bool(mem[FLOOR_ACTIVE]), float(mem[FLOOR_MAX_RATIO]))
+            floor.count_step()
         if status == DONE:
-            ti._step += 1
+            ti.count_unchecked()
         else:  # TaskInertia.solve: its check (staged), or its fallback (the Cholesky failed)
             finish(ti.solve(self.Jb, self.JbMinv, mem[A:A + 6].copy()), arm.M, arm.v, arm.h,
                    self.par, mem, self.work)

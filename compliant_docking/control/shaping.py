@@ -65,14 +65,28 @@ class ApparentInertiaFloor:
         self.P = (self._w_isqrt[:, None] * V * c).dot(V.T * self._w_sqrt)
         self.P_and_I[:, : len(c)] = self.P
 
-    def current(self, J: np.ndarray, JMinv: np.ndarray) -> np.ndarray | None:
-        """This step's P = W_eff⁻¹W given its J and J M⁻¹, or None while the floor is inactive
-        (the caller then leaves its W⁻¹u untouched, bit for bit)."""
-        if self._step % self.every == 0:
-            self.refresh(JMinv.dot(J.T))
+    def due(self) -> bool:
+        """Whether this step refreshes P (every ``every`` steps)."""
+        return self._step % self.every == 0
+
+    def refreshed_elsewhere(self, active: bool, max_ratio: float) -> None:
+        """Take the result of a refresh computed elsewhere (se3_lie's compiled step), which
+        wrote P into ``P_and_I``'s left block: P is that block, or None when inactive."""
+        self.P = self.P_and_I[:, : len(self._w_sqrt)].copy() if active else None
+        self.max_ratio = max_ratio
+
+    def count_step(self) -> None:
+        """The step's bookkeeping, once its P is current."""
         self._step += 1
         if self.P is not None:
             self.active_steps += 1
+
+    def current(self, J: np.ndarray, JMinv: np.ndarray) -> np.ndarray | None:
+        """This step's P = W_eff⁻¹W given its J and J M⁻¹, or None while the floor is inactive
+        (the caller then leaves its W⁻¹u untouched, bit for bit)."""
+        if self.due():
+            self.refresh(JMinv.dot(J.T))
+        self.count_step()
         return self.P
 
     def apply(self, J: np.ndarray, JMinv: np.ndarray, x: np.ndarray) -> np.ndarray:
