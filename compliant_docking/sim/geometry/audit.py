@@ -221,11 +221,11 @@ class Audit:
             out.append(
                 ContactSample(
                     approach=approach,
-                    tip=tuple(float(x) for x in tip),
+                    tip=_triple(tip),
                     tilt_deg=tilt.angle_deg,
                     socket_geom=self.model.geom(socket_geom).name,
-                    point=tuple(float(x) for x in point),
-                    normal=tuple(float(x) for x in into_plug),
+                    point=_triple(point),
+                    normal=_triple(into_plug),
                     depth=float(-contact.dist),
                     angle_deg=angle_to_cone_deg(into_plug, cone),
                     excess_up=float(into_plug[2] - cone[:, 2].max()),
@@ -300,6 +300,10 @@ class Audit:
                     touch = _first_touch(lambda z: self._place(pose(z), quat) <= 0.0, 0.0, top + 0.001)
                     found += self._press("vertical", pose, touch, 1e-5, tilt)
         return found
+
+
+def _triple(v: np.ndarray) -> tuple[float, float, float]:
+    return float(v[0]), float(v[1]), float(v[2])
 
 
 def _first_touch(touching, free: float, deep: float) -> float:
