@@ -28,9 +28,11 @@ import tempfile
 import time
 from pathlib import Path
 
-from compliant_docking import CONF_DIR, REPO_ROOT
+from compliant_docking import CONF_DIR
 from compliant_docking.config import load_config
 from compliant_docking.sim.simulate import prepare, replay_physics
+
+REPO_ROOT = Path(__file__).resolve().parents[1]  # the checkout
 
 #: targets of issue 12 (on both robots): minimum real-time factor and maximum loop/replay
 RTF_TARGETS = {"impedance": 25.0, "hqp": 15.0, "se3_lie": 25.0}

@@ -10,8 +10,10 @@ from pathlib import Path
 
 import numpy as np
 
-from compliant_docking import REPO_ROOT
 from compliant_docking.config import load_config
+
+#: the checkout the tests run from (its commands, benchmarks, notebook and docs)
+REPO_ROOT = Path(__file__).resolve().parents[1]
 
 #: the composed config for some overrides, exactly as the CLI would build it
 make_cfg = load_config

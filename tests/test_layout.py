@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from compliant_docking import REPO_ROOT
+from tests.helpers import REPO_ROOT
 
 PACKAGE = REPO_ROOT / "compliant_docking"
 #: the layers, lowest first; a module may import its own layer and the ones below

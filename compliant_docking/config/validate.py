@@ -219,8 +219,11 @@ def _choice(cfg: DictConfig, group: str) -> str | None:
 
 
 def _group_names() -> set[str]:
-    """The config groups (folders under conf/): their nodes are not schema settings."""
-    return {p.name for p in CONF_DIR.iterdir() if p.is_dir()} if CONF_DIR.is_dir() else set()
+    """The config groups (folders under conf/, not ``__pycache__``): their nodes are not
+    schema settings."""
+    if not CONF_DIR.is_dir():
+        return set()
+    return {p.name for p in CONF_DIR.iterdir() if p.is_dir() and not p.name.startswith(("_", "."))}
 
 
 def _first_line(exc: BaseException) -> str:

@@ -11,10 +11,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from compliant_docking import REPO_ROOT, gl
+from compliant_docking import gl
 from compliant_docking.run.runner import execute
 from compliant_docking.viz.render import VIDEO_FILE, frame_count, frame_rows
-from tests.helpers import make_cfg
+from tests.helpers import REPO_ROOT, make_cfg
 
 #: a short run at a low resolution: 1.5 s at 10 frames per second → 15 frames
 SHORT = (
