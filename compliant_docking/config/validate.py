@@ -183,6 +183,10 @@ def composition_problem(exc: BaseException) -> str:
         return unknown_key(key, [f.name for f in dataclasses.fields(schema)])
     if key:
         return f"{key}: {_first_line(cause).rstrip('.')}."
+    if "Could not find 'schema/launcher/submitit_" in str(exc):  # registered only with the plugin
+        from compliant_docking.extras import hint
+
+        return hint("cluster", "Hydra's submitit launcher (hydra-submitit-launcher, submitit)")
     return one_paragraph(exc)
 
 
