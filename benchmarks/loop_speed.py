@@ -34,7 +34,7 @@ from compliant_docking.sim.simulate import prepare, replay_physics
 
 REPO_ROOT = Path(__file__).resolve().parents[1]  # the checkout
 
-#: targets of issue 12 (on both robots): minimum real-time factor and maximum loop/replay
+#: the speed targets (on both robots): minimum real-time factor and maximum loop/replay
 RTF_TARGETS = {"impedance": 25.0, "hqp": 15.0, "se3_lie": 25.0}
 RATIO_TARGETS = {"impedance": 3.5, "hqp": 5.0, "se3_lie": 3.5}
 CLI_TARGET_S = 10.0

@@ -70,7 +70,7 @@ def load_runs(path: str | os.PathLike = "runs") -> pd.DataFrame:
     - every leaf of the job's resolved config (``.hydra/config.yaml``) as a dotted column:
       ``controller.k``, ``physics.timestep``, ``target.geometry.radial_clearance``,
       ``task.misalignment.x_range``, … in the config's units (SI unless the key names
-      another, docs/configuration.md); lists as their JSON text (``[-0.002, 0.002]``).
+      another: conf/'s comments); lists as their JSON text (``[-0.002, 0.002]``).
       A leaf overridden on the command line fills the override's column (the resolved
       value, the same number); a leaf whose name is a metrics.json key gets the prefix
       ``config.``. Jobs without a composed config (a run made by ``runner.execute``

@@ -179,7 +179,7 @@ def socket_pose(cfg: DictConfig) -> SocketPose | None:
     """The socket's nominal (believed) and physical (true) seat pose in the world.
 
     believed = ``target.pos``/``target.quat``; true = believed · the misalignment of
-    ``task.misalignment`` (fixed or drawn with its seed; compliant_docking/misalignment.py).
+    ``task.misalignment`` (fixed or drawn with its seed; compliant_docking/sim/misalignment.py).
     """
     offset = draw(cfg.task.get("misalignment"))
     if cfg.target.name == "none":

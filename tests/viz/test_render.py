@@ -1,4 +1,4 @@
-"""render=video (compliant_docking/render.py) and the OpenGL backend choice (gl.py)."""
+"""render=video (compliant_docking/viz/render.py) and the OpenGL backend choice (gl.py)."""
 
 from __future__ import annotations
 
