@@ -15,17 +15,20 @@ texts.
 * a bare Markdown file name (``friction.md``, ``SOMETHING.md``): docs cite each other by
   name.
 
-Not paths: tokens with a placeholder (``<robot>``, ``{name}``, ``*``, ``$``, ``…``), URLs,
-absolute paths and ``~/…`` (outside the repository), and names under the folders runs
-write (``runs/``, ``outputs/``, ``multirun/``, a run directory's ``figures/``,
-``comparison/``, ``tuning/``, ``.hydra/``, ``.submitit/``, ``.cache/``), which exist only
-after a run.
+Not paths: tokens with a placeholder (``<robot>``, ``{name}``, ``*``, ``$``, ``…``, a
+part in capitals such as ``NAME``), URLs, absolute paths and ``~/…`` (outside the
+repository), a path whose first folder is no folder of the repository (``my_conf/…`` in an
+example: the top level's, the package's, ``conf/``'s, ``tests/``'s and ``docs/``'s count),
+and names under the folders runs write (``runs/``, ``outputs/``, ``multirun/``, a run
+directory's ``figures/``, ``comparison/``, ``tuning/``, ``.hydra/``, ``.submitit/``,
+``.cache/``), which exist only after a run.
 
 **Where a path may exist**: relative to the repository root, to the package folder
 (docs abbreviate ``compliant_docking/control/jit.py`` as ``control/jit.py``), to
 ``conf/``, to ``tests/``, or to the mentioning file's folder (Markdown links, sibling
-docs); a bare Markdown name may be any tracked Markdown file. A few strings are files a
-test or an example creates itself (:data:`CREATED`).
+docs); a bare Markdown name may be any tracked Markdown file. The exceptions are listed:
+files commands write (:data:`OUTPUT_NAMES`), files of other projects (:data:`EXTERNAL`)
+and names a test uses because they do not exist (:data:`MISSING_ON_PURPOSE`).
 
 **Ticket numbers**: ``issue 10``, ``issue-12``, ``issue12``, ``ticket 3``, ``#12`` in
 prose … say what a thing is, not which ticket brought it. The paper's "Table 10" is
@@ -63,11 +66,10 @@ OUTPUT_PARTS = {
 OUTPUT_NAMES = {"summary.md", "hydra/config.yaml"}
 #: files of other projects, named where numbers come from (MuJoCo Menagerie's models)
 EXTERNAL = {"franka_fr3/fr3.xml", "kuka_iiwa_14/iiwa14.xml"}
-#: files that a test or an example creates before naming them (name → why)
-CREATED = {
-    "my_conf/controller/stiff_impedance.yaml": "docs/extending.md's example, made by its test",
-    "my_conf/tool/wide_plug.yaml": "docs/extending.md's example, made by its test",
-    "my_conf/target/wide_socket.yaml": "docs/extending.md's example, made by its test",
+#: names a test uses because they do not exist (name → why)
+MISSING_ON_PURPOSE = {
+    "assets/interfaces/nothing/tool.xml": "tests/test_package.py: the 'no such file' message",
+    "interfaces/nothing/tool.xml": "tests/test_package.py: the same, under the packaged assets",
 }
 
 LINK = re.compile(r"\]\(([^)\s]+)\)")
@@ -103,6 +105,18 @@ def top_level() -> frozenset[str]:
 
 
 @cache
+def repository_folders() -> frozenset[str]:
+    """The folders a repository path may start with: the top level's, the package's and conf/'s."""
+    inner = {
+        p.split("/")[i]
+        for p in tracked()
+        for prefix, i in (("compliant_docking/", 1), ("conf/", 1), ("tests/", 1), ("docs/", 1))
+        if p.startswith(prefix) and p.count("/") > i
+    }
+    return top_level() | inner
+
+
+@cache
 def markdown_names() -> frozenset[str]:
     return frozenset(Path(p).name for p in tracked() if p.endswith(".md"))
 
@@ -121,11 +135,17 @@ def mentions(path: str, text: str) -> list[str]:
 
 
 def exists(mention: str, path: str) -> bool:
-    if PLACEHOLDER.search(mention) or mention.startswith(("/", "~")) or mention in CREATED.keys() | EXTERNAL:
+    if (
+        PLACEHOLDER.search(mention)
+        or mention.startswith(("/", "~"))
+        or mention in MISSING_ON_PURPOSE.keys() | EXTERNAL
+    ):
         return True
     parts = [p for p in mention.split("/") if p not in ("", ".")]
     if any(p in OUTPUT_PARTS for p in parts) or mention in OUTPUT_NAMES:
         return True
+    if "/" in mention.rstrip("/") and not mention.startswith("..") and parts[0] not in repository_folders():
+        return True  # my_conf/…, a user's folder in an example: not a repository path
     if "/" not in mention.rstrip("/") and mention.endswith(".md"):
         return mention in markdown_names()
     here = (REPO_ROOT / path).parent
