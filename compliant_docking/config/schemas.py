@@ -52,7 +52,7 @@ class RobotConfig:
     """An arm: its MJCF and what MJCF cannot carry (velocity limits, software torque clip)."""
 
     name: str = MISSING
-    mjcf: str = MISSING  # arm-only MJCF, relative to the repository root
+    mjcf: str = MISSING  # arm-only MJCF; relative: the working directory's, else under assets/ the package's
     ee_site: str = MISSING  # flange site where the tool is mounted
     velocity_limits: List[float] = positive(at_most=100.0, unit="rad/s")  # datasheet joint speed limits
     torque_limits: List[float] = positive(unit="N·m")  # hardware joint torque limits [N·m] (MJCF ctrlrange)
