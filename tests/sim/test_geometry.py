@@ -11,7 +11,6 @@ import mujoco
 import numpy as np
 import pytest
 
-from compliant_docking import REPO_ROOT as ROOT
 from compliant_docking.config.geometry import check_fit
 from compliant_docking.config.store import default_interface
 from compliant_docking.sim.geometry import (
@@ -20,6 +19,7 @@ from compliant_docking.sim.geometry import (
     plug_hull_vertices,
     plug_inertia,
 )
+from tests.helpers import REPO_ROOT as ROOT
 
 #: the default interface of conf/ (tool=cone_plug, target=cone_socket)
 PLUG, SOCKET, CONTACT = default_interface()
