@@ -225,7 +225,7 @@ def _bevelled(hull: Hull, planes: np.ndarray) -> Hull:
 def inside(hull: Hull, solid: Solid, tolerance: float = TOLERANCE) -> bool:
     """Whether the hull lies inside the solid (it overlaps no triangle by more than
     ``tolerance`` and its centre is inside)."""
-    return not len(solid.crossing(hull, tolerance)) and solid.holds(hull)
+    return not solid.enters(hull, tolerance) and solid.holds(hull)
 
 
 def clip_to_solid(hull: Hull, solid: Solid, tolerance: float = TOLERANCE) -> list[Hull]:

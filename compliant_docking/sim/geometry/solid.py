@@ -50,6 +50,11 @@ class Solid:
         planes[:, 3] = np.bincount(self.plane_of, weights=offsets, minlength=len(unique)) / counts
         self.planes = planes
         self.lower, self.upper = self.triangles.min(axis=1), self.triangles.max(axis=1)
+        # points on the surface for a quick first look (corners, edge middles, centres)
+        t = self.triangles
+        self.samples = np.unique(
+            np.vstack([t.reshape(-1, 3), 0.5 * (t + t[:, [1, 2, 0]]).reshape(-1, 3), t.mean(axis=1)]), axis=0
+        )
         self.size = float(np.linalg.norm(self.upper.max(axis=0) - self.lower.min(axis=0)))
 
     def plane_index(self, normal: np.ndarray, offset: float) -> int:
@@ -86,6 +91,15 @@ class Solid:
         """Whether the hull's centre is inside the solid (with :meth:`crossing` empty: the
         whole hull is)."""
         return bool(self.winding(hull.centre)[0] > 0.5)
+
+    def enters(self, hull: Hull, tolerance: float) -> bool:
+        """Whether any triangle overlaps the hull by more than ``tolerance`` (as
+        :meth:`crossing`, answered early when a point of the surface lies that deep in it)."""
+        low, high = hull.vertices.min(axis=0), hull.vertices.max(axis=0)
+        near = self.samples[np.all((self.samples > low) & (self.samples < high), axis=1)]
+        if len(near) and hull.depth(near).max() > tolerance:
+            return True
+        return bool(len(self.crossing(hull, tolerance)))
 
     def crossing(self, hull: Hull, tolerance: float) -> np.ndarray:
         """The planes (indices into ``planes``) of the triangles that the hull overlaps by
