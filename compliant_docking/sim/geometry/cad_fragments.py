@@ -69,15 +69,7 @@ def tool_fragment(
     body.ipos = com_dock.tolist()
     i = inertia_dock
     body.fullinertia = [i[0, 0], i[1, 1], i[2, 2], i[0, 1], i[0, 2], i[1, 2]]
-    for k, hull in enumerate(hulls):
-        spec.add_mesh(name=f"plug_piece_{k}", uservert=to_dock(hull.vertices).ravel().tolist())
-        g = body.add_geom(
-            name=f"plug_piece_{k}",
-            type=mujoco.mjtGeom.mjGEOM_MESH,
-            meshname=f"plug_piece_{k}",
-            group=PLUG_COLLISION_GROUP,
-            rgba=list(PLUG_RGBA),
-        )
+    for g in _add_pieces(spec, body, "plug_piece", [to_dock(h.vertices) for h in hulls], PLUG_RGBA):
         make_plug_collider(g, options.contact)
     visual = _add_visual(spec, body, "plug_visual", to_dock(plug[0]), plug[1], VISUAL_GROUP, PLUG_RGBA)
     if options.collision == "sdf":
@@ -102,15 +94,7 @@ def target_fragment(
     spec = mujoco.MjSpec()
     spec.modelname = "cad_socket"
     body = spec.worldbody.add_body(name="dock")
-    for k, hull in enumerate(hulls):
-        spec.add_mesh(name=f"socket_piece_{k}", uservert=(hull.vertices - seat).ravel().tolist())
-        g = body.add_geom(
-            name=f"socket_piece_{k}",
-            type=mujoco.mjtGeom.mjGEOM_MESH,
-            meshname=f"socket_piece_{k}",
-            group=PLUG_COLLISION_GROUP,
-            rgba=list(SOCKET_RGBA),
-        )
+    for g in _add_pieces(spec, body, "socket_piece", [h.vertices - seat for h in hulls], SOCKET_RGBA):
         make_socket_collider(g, options.contact)
     visual = _add_visual(spec, body, "socket_visual", socket[0] - seat, socket[1], 0, SOCKET_RGBA)
     if options.collision == "sdf":
@@ -120,6 +104,25 @@ def target_fragment(
     body.add_site(name="mouth", pos=[0.0, 0.0, float(socket[0][:, 2].max()) - z_tip])
     declare_key(spec, key)
     return spec
+
+
+def _add_pieces(
+    spec: mujoco.MjSpec, body: mujoco.MjsBody, prefix: str, pieces: list[np.ndarray], rgba
+) -> list[mujoco.MjsGeom]:
+    """One convex mesh geom ``<prefix>_<k>`` per piece (its vertices in the body frame)."""
+    geoms = []
+    for k, vertices in enumerate(pieces):
+        spec.add_mesh(name=f"{prefix}_{k}", uservert=np.ravel(vertices).tolist())
+        geoms.append(
+            body.add_geom(
+                name=f"{prefix}_{k}",
+                type=mujoco.mjtGeom.mjGEOM_MESH,
+                meshname=f"{prefix}_{k}",
+                group=PLUG_COLLISION_GROUP,
+                rgba=list(rgba),
+            )
+        )
+    return geoms
 
 
 def _add_visual(
