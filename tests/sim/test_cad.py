@@ -338,13 +338,13 @@ def test_converted_example_docks_with_every_controller(tmp_path, robot, controll
 
 @pytest.mark.slow
 def test_example_converts_from_scratch_with_the_defaults(tmp_path):
-    """The README's `make` step without its cache: CoACD refines the socket until the pieces
-    keep 75 % of every gap (about 2 minutes), and the result docks."""
+    """The README's `make` step without its cache: CoACD once at 0.05, the pieces rebuilt
+    (they keep every gap), the contact audit passed (about 40 s), and the result docks."""
     plug_stl, socket_stl = export_keyed(tmp_path / "cad")
     result = cad.convert(
         plug_stl, socket_stl, tmp_path / "out", cad.ConvertOptions(symmetry=4, plug_mass=0.3)
     )
-    assert result.manifest["clearance"]["worst_kept"] >= 0.75
+    assert result.manifest["clearance"]["worst_kept"] > 0.999 and result.manifest["contact_audit"]["passed"]
     record = execute(
         make_cfg(
             f"tool.mjcf={tmp_path / 'out' / 'tool.xml'}",
