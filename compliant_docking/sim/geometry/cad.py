@@ -155,12 +155,13 @@ class ClearanceLost(Refused):
     ):
         self.report = report
         self.holes = holes or {}
-        uncovered = "".join(
-            f"; {100 * share:.3f} % of the {part}'s surface is in no piece"
+        failed = [] if report.passed else [f"do not keep the clearance ({report.summary()})"]
+        failed += [
+            f"leave holes ({100 * share:.3f} % of the {part}'s surface, probed 1 µm under it, is in no piece)"
             for part, share in self.holes.items()
-        )
+        ]
         super().__init__(
-            f"the convex pieces do not keep the clearance ({report.summary()}{uncovered}) even at CoACD "
+            f"the convex pieces {' and '.join(failed)} even at CoACD "
             f"threshold {thresholds} (min_threshold): refusing to write fragments. Lower "
             "--min-threshold, allow more pieces (--max-pieces), or use MuJoCo's SDF collision "
             "for this shape (docs/interfaces.md)"
