@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import shutil
 
 import mujoco
@@ -192,16 +193,18 @@ def test_a_coarse_decomposition_is_made_exact(converted, tmp_path):
     assert m["clearance"]["worst_kept"] > 0.999 and m["contact_audit"]["passed"]
 
 
+def _as_coacd_made_them(hulls, mesh, settings):
+    """conform() that keeps CoACD's pieces as they are."""
+    return hulls, cad.ConformReport(len(hulls), len(hulls), len(hulls), 0, 0, 0.0, 0, 0, 0.0, 0.0)
+
+
 def test_raw_coacd_pieces_are_refused_by_the_contact_audit(converted, tmp_path, monkeypatch):
     """Without the rebuilding, CoACD's own pieces (which keep half of every gap, so the
     clearance check passes) fail the contact audit: refused, naming where, and nothing
     written."""
     plug_stl, socket_stl, *_ = converted
 
-    def as_coacd_made_them(hulls, mesh, settings):
-        return hulls, cad.ConformReport(len(hulls), len(hulls), len(hulls), 0, 0, 0.0, 0, 0, 0.0, 0.0)
-
-    monkeypatch.setattr(cad, "conform", as_coacd_made_them)
+    monkeypatch.setattr(cad, "conform", _as_coacd_made_them)
     options = cad.ConvertOptions(symmetry=4, coacd=QUICK, keep=0.5)
     with pytest.raises(cad.ContactsUnsound, match=r"deg off on socket_piece_\d+ at \(") as caught:
         cad.convert(plug_stl, socket_stl, tmp_path, options, log=lambda _: None)
@@ -276,6 +279,14 @@ def test_command_line_exports_converts_from_the_cache_and_exits_by_outcome(
     out = capsys.readouterr().out
     assert "(from the cache)" in out and f"tool.mjcf={copy / 'tool.xml'}" in out
     assert main([str(tmp_path / "none.stl"), str(socket_stl), "--out", str(copy)]) == 1
+    assert "no such file" in capsys.readouterr().err
+    # CoACD's own pieces (cached), not rebuilt: the contact audit refuses them, saying where
+    monkeypatch.setattr(cad, "conform", _as_coacd_made_them)
+    assert main([*argv, "--quick", "--keep", "0.5", "--margin-mm", "2.5"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("refused: the convex pieces' contacts are not those of the solid parts")
+    assert re.search(r"\d+\.\d deg off on socket_piece_\d+ at \(-?\d+\.\d\d, ", err)
+    assert json.loads((copy / "interface.json").read_text()) == result.manifest  # nothing written
     plug, socket, plug_hulls, _ = pair
     lost = check_clearance(plug, plug_hulls, socket, [Hull.of(socket[0])], samples=500)
 
