@@ -635,6 +635,14 @@ MUTATIONS = (
         "an empty time series is not reported as all null",
         CONTACT_TESTS,
     ),
+    Mutation(
+        "K37",
+        RUNNER,
+        "        contact = contact_metrics(\n            ts,\n            sim.scene.socket.true,",
+        "        contact = contact_metrics(\n            ts,\n            sim.scene.socket.believed,",
+        "contact metrics measured against the believed socket, not the true one",
+        MISALIGNMENT_TESTS,
+    ),
     # ---------------------------------------------------------------- misalignment draws
     Mutation(
         "D1",
