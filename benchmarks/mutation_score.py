@@ -92,7 +92,6 @@ MUTATIONS = (
         "np.max(manipulability)",
         "maximum instead of minimum manipulability",
         METRIC_TESTS,
-        True,
     ),
     Mutation(
         "M2",
@@ -101,7 +100,6 @@ MUTATIONS = (
         "_max_pct(np.abs(v), 2.0 * np.asarray(velocity_limits, dtype=float))",
         "velocity % against twice the limit",
         METRIC_TESTS,
-        True,
     ),
     Mutation(
         "M3",
@@ -110,7 +108,6 @@ MUTATIONS = (
         "lateral = pos_err",
         "lateral error not projected off the axis",
         METRIC_TESTS,
-        True,
     ),
     Mutation(
         "M4",
@@ -119,7 +116,6 @@ MUTATIONS = (
         "final_orientation_error_rad=np.mean(ori_norm)",
         "final orientation error over the whole run",
         METRIC_TESTS,
-        True,
     ),
     Mutation(
         "M5",
@@ -128,7 +124,6 @@ MUTATIONS = (
         'np.mean(ts["pos_error"].to_numpy())',
         "position RMS replaced by the mean",
         METRIC_TESTS,
-        True,
     ),
     Mutation(
         "M6",
@@ -137,7 +132,6 @@ MUTATIONS = (
         "np.mean(ori_norm)",
         "orientation RMS replaced by the mean",
         METRIC_TESTS,
-        True,
     ),
     Mutation(
         "M7",
@@ -235,7 +229,6 @@ MUTATIONS = (
         "            np.inf,\n",
         "peak-force check removed",
         GATE_TESTS,
-        True,
     ),
     Mutation(
         "G2",
@@ -244,7 +237,6 @@ MUTATIONS = (
         "            np.inf,\n",
         "tilt check removed",
         GATE_TESTS,
-        True,
     ),
     Mutation(
         "G3",
@@ -253,7 +245,6 @@ MUTATIONS = (
         "        elif value > 3 * limit:",
         "every tolerance × 3",
         GATE_TESTS,
-        True,
     ),
     Mutation(
         "G4",
@@ -262,7 +253,6 @@ MUTATIONS = (
         "            np.inf,\n",
         "depth check removed",
         GATE_TESTS,
-        True,
     ),
     Mutation(
         "G5",
@@ -917,7 +907,6 @@ MUTATIONS = (
         "out[3:] += weight_moment.dot",
         "weight-moment sign flipped",
         SENSOR_TESTS,
-        True,
     ),
     Mutation("S2", SENSOR, "            out[:3] -= weight\n", "", "tool weight not removed", SENSOR_TESTS),
     Mutation(
@@ -944,7 +933,6 @@ MUTATIONS = (
         "D = np.array([0.5 * d] * 3 + [d_rot] * 3, dtype=float)",
         "impedance damping halved",
         LAW_TESTS,
-        True,
     ),
     Mutation(
         "C2",
@@ -1091,7 +1079,6 @@ MUTATIONS = (
         "            dirty = False",
         "git_dirty never true",
         PROVENANCE_TESTS,
-        True,
     ),
     Mutation(
         "P2",
