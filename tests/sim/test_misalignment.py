@@ -8,6 +8,7 @@ import mujoco
 import numpy as np
 import pytest
 
+from compliant_docking.run.rundir import read_timeseries
 from compliant_docking.run.runner import execute
 from compliant_docking.sim.misalignment import (
     RECORD_KEYS,
@@ -241,6 +242,14 @@ def test_large_misalignment_fails_the_gate_and_says_why(tmp_path):
     assert record["seat_lateral_error_m"] > 0.015  # measured against the TRUE socket
     # the plug comes down the believed axis: it first touches 20 mm from the TRUE one
     assert record["first_contact_lateral_offset_m"] == pytest.approx(0.02, abs=1e-4)
+    # the gate's force is the run's axial force (down −z, the believed axis) averaged over
+    # task.force_window = 50 ms: 50 rows at dt = 1 ms
+    ts = read_timeseries(tmp_path, ["t", "fz"])
+    assert np.diff(ts["t"].to_numpy()) == pytest.approx(0.001)
+    axial = ts["fz"].to_numpy()
+    assert record["peak_axial_force_N"] == pytest.approx(np.max(np.abs(axial)), rel=1e-12)
+    window_means = np.convolve(axial, np.full(50, 1 / 50), mode="valid")
+    assert record["filtered_peak_axial_force_N"] == pytest.approx(np.max(np.abs(window_means)), rel=1e-9)
     saved = json.loads((tmp_path / "metrics.json").read_text())
     assert saved["misalignment_x_m"] == 0.02 and saved["misalignment_lateral_m"] == 0.02
     assert saved["misalignment_yaw_deg"] == 0.0 and saved["misalignment_seed"] is None
