@@ -15,7 +15,7 @@ with ``pytest -x`` (stop at the first failure), and the file is restored. A muta
 
 ``--ref`` takes the tree of a commit instead of the working tree (mutations whose text
 is not in that tree are reported as n/a). Run from the repository root with the
-project's interpreter (``.venv/bin/python``); it takes about 13 minutes on 2 cores.
+project's interpreter (``.venv/bin/python``); it takes about 15 minutes on 2 cores.
 """
 
 from __future__ import annotations
@@ -49,6 +49,7 @@ PROVENANCE = "compliant_docking/run/provenance.py"
 RUNNER = "compliant_docking/run/runner.py"
 TABLES = "compliant_docking/results/tables.py"
 MISALIGNMENT = "compliant_docking/sim/misalignment.py"
+TASK_CONF = "conf/task/docking.yaml"
 
 METRIC_TESTS = ("tests/evaluation/test_docking.py", "tests/run/test_runner.py")
 GATE_TESTS = (
@@ -57,6 +58,8 @@ GATE_TESTS = (
     "tests/run/test_runner.py",
 )
 CONTACT_TESTS = ("tests/evaluation/test_contact.py",)
+FILTERED_TESTS = ("tests/evaluation/test_filtered_peak.py", "tests/evaluation/test_docking.py")
+FILTERED_RUN_TESTS = ("tests/sim/test_misalignment.py",)
 MISALIGNMENT_TESTS = ("tests/sim/test_misalignment.py",)
 TRACKING_TESTS = ("tests/evaluation/test_tracking_gate.py",)
 SENSOR_TESTS = ("tests/sim/test_sensor.py", "tests/control/test_impedance.py")
@@ -333,6 +336,151 @@ MUTATIONS = (
         'contact["steady_force_std_N"]',
         "force spread judged although its mean is missing",
         GATE_TESTS,
+    ),
+    # ---------------------------------------------------------------- filtered peak force
+    Mutation(
+        "F1",
+        DOCKING,
+        "int(round(window / dt))",
+        "int(window / dt)",
+        "filtered peak: the window's rows floored, not rounded",
+        FILTERED_TESTS,
+    ),
+    Mutation(
+        "F2",
+        DOCKING,
+        "int(round(window / dt))",
+        "int(np.ceil(window / dt))",
+        "filtered peak: the window's rows rounded up",
+        FILTERED_TESTS,
+    ),
+    Mutation(
+        "F3",
+        DOCKING,
+        "min(max(int(round(window / dt)), 1), force.size)",
+        "min(int(round(window / dt)), force.size)",
+        "filtered peak: a window shorter than half a step has no row",
+        FILTERED_TESTS,
+    ),
+    Mutation(
+        "F4",
+        DOCKING,
+        "min(max(int(round(window / dt)), 1), force.size)",
+        "max(int(round(window / dt)), 1)",
+        "filtered peak: a series shorter than the window is not averaged whole",
+        FILTERED_TESTS,
+    ),
+    Mutation(
+        "F5",
+        DOCKING,
+        "min(max(int(round(window / dt)), 1), force.size)",
+        "min(max(int(round(window / dt)), 1) + 1, force.size)",
+        "filtered peak: the window one row longer",
+        FILTERED_TESTS,
+    ),
+    Mutation(
+        "F6",
+        DOCKING,
+        "dt = float(t[1] - t[0]) if len(t) > 1 else 1.0",
+        "dt = 0.001",
+        "filtered peak: the window counted in 1 ms rows whatever the time step",
+        FILTERED_TESTS,
+    ),
+    Mutation(
+        "F7",
+        DOCKING,
+        "sums = np.cumsum(np.r_[0.0, force])",
+        "sums = np.cumsum(np.r_[0.0, np.abs(force)])",
+        "filtered peak: the mean of |f|, not |mean f|",
+        FILTERED_TESTS,
+    ),
+    Mutation(
+        "F8",
+        DOCKING,
+        "np.max(np.abs(sums[n:] - sums[:-n])) / n",
+        "np.max(sums[n:] - sums[:-n]) / n",
+        "filtered peak: signed (a pull reads nothing)",
+        FILTERED_TESTS,
+    ),
+    Mutation(
+        "F9",
+        DOCKING,
+        "np.max(np.abs(sums[n:] - sums[:-n])) / n",
+        "np.max(np.abs(sums[n:] - sums[:-n]))",
+        "filtered peak: the sum over the window, not the mean",
+        FILTERED_TESTS,
+    ),
+    Mutation(
+        "F10",
+        DOCKING,
+        "np.max(np.abs(sums[n:] - sums[:-n])) / n",
+        "np.max(np.abs(sums[n + 1 :] - sums[1:-n])) / n",
+        "filtered peak: the first full window skipped",
+        FILTERED_TESTS,
+    ),
+    Mutation(
+        "F11",
+        DOCKING,
+        "np.max(np.abs(sums[n:] - sums[:-n])) / n",
+        "np.max(np.abs(sums[n:-1] - sums[: -n - 1])) / n",
+        "filtered peak: the last full window skipped",
+        FILTERED_TESTS,
+    ),
+    Mutation(
+        "F12",
+        DOCKING,
+        '        return float("nan")\n    dt = ',
+        "        return 0.0\n    dt = ",
+        "filtered peak of an empty series: 0 N, not unknown",
+        FILTERED_TESTS,
+    ),
+    Mutation(
+        "F13",
+        DOCKING,
+        "filtered_peak(axial, t, force_window)",
+        "filtered_peak(np.linalg.norm(ts[FORCE].to_numpy(), axis=1), t, force_window)",
+        "filtered peak of |f|, not of the axial force",
+        FILTERED_TESTS,
+    ),
+    Mutation(
+        "F14",
+        DOCKING,
+        "filtered_peak(axial, t, force_window)",
+        "filtered_peak(axial[steady], t[steady], force_window)",
+        "filtered peak over the steady window only",
+        FILTERED_TESTS,
+    ),
+    Mutation(
+        "F15",
+        DOCKING,
+        "filtered_peak(axial, t, force_window)",
+        "filtered_peak(axial, t, steady_window)",
+        "filtered peak over the steady window's length",
+        FILTERED_TESTS,
+    ),
+    Mutation(
+        "F16",
+        RUNNER,
+        "force_window=float(cfg.task.force_window)",
+        "force_window=float(cfg.task.strike_window)",
+        "the runner filters over task.strike_window",
+        FILTERED_RUN_TESTS,
+    ),
+    Mutation(
+        "F17",
+        DOCKING,
+        '            metrics["filtered_peak_axial_force_N"],\n',
+        '            metrics["peak_axial_force_N"],\n',
+        "the gate judges the raw per-step peak",
+        GATE_TESTS + ("tests/evaluation/test_filtered_peak.py",),
+    ),
+    Mutation(
+        "F18",
+        TASK_CONF,
+        "force_window: 0.05\n",
+        "force_window: 0.5\n",
+        "the default force window 0.5 s",
+        FILTERED_TESTS,
     ),
     # ---------------------------------------------------------------- contact metrics
     Mutation(
