@@ -1342,15 +1342,25 @@ def main(argv: list[str] | None = None) -> int:
     with tempfile.TemporaryDirectory(prefix="mutation_") as tmp:
         tree = Path(tmp)
         source_tree(args.ref, tree)
+        # the config tree and the assets are the packages compliant_docking.conf and .assets,
+        # mapped to the checkout's conf/ and assets/ by its editable install: link the copy's
+        # own, found first on PYTHONPATH, so that a mutation of a config file is seen
+        for data in ("conf", "assets"):
+            if (tree / data).is_dir() and not (tree / "compliant_docking" / data).exists():
+                (tree / "compliant_docking" / data).symlink_to(Path("..") / data)
         where = subprocess.run(
-            [sys.executable, "-c", "import compliant_docking; print(compliant_docking.__file__)"],
+            [
+                sys.executable,
+                "-c",
+                "import compliant_docking as c; print(c.__file__); print(c.CONF_DIR); print(c.ASSETS_DIR)",
+            ],
             cwd=tree,
             capture_output=True,
             text=True,
             env={**os.environ, "PYTHONPATH": str(tree)},
-        ).stdout.strip()
-        if not where.startswith(str(tree)):
-            sys.exit(f"the copy does not import its own package (got {where!r})")
+        ).stdout.split()
+        if len(where) != 3 or not all(w.startswith(str(tree)) for w in where):
+            sys.exit(f"the copy does not import its own package, config and assets (got {where!r})")
         for m in chosen:
             target = tree / m.path
             original = target.read_text(encoding="utf-8") if target.is_file() else ""
