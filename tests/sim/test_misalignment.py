@@ -8,6 +8,7 @@ import mujoco
 import numpy as np
 import pytest
 
+from compliant_docking.run.rundir import read_timeseries
 from compliant_docking.run.runner import execute
 from compliant_docking.sim.misalignment import (
     RECORD_KEYS,
@@ -93,6 +94,117 @@ def test_same_seed_same_draw_and_components_draw_independently():
     assert len(seeds) == 20 and min(seeds) < 0.25 and max(seeds) > 0.75
 
 
+# --------------------------------------------------------------------------- definitions
+# Closed forms of the draws and of the composition (docs/sweeps.md, "Socket misalignment"),
+# without a simulation; benchmarks/mutation_score.py (D*) changes each part of them and
+# checks that one of these tests fails.
+
+
+def test_the_true_pose_is_the_believed_one_times_trans_then_rz_then_rx():
+    """T = B · Trans(x, y, 0) · Rz(ψ) · Rx(θ) for a believed pose B (turned and tilted, off
+    the origin), x = 3 mm, y = −2 mm, ψ = 30°, θ = 10° (degrees): the true seat is at
+    B.p + B.R (x, y, 0) (offsets in the believed frame, not turned by ψ or θ); its x axis
+    is B.R (cos ψ, sin ψ, 0) (the tilt is about it); its z axis is B.R (sin θ sin ψ,
+    −sin θ cos ψ, cos θ): it leans by θ towards the yawed −y direction."""
+    import pinocchio as pin
+
+    b_rot = np.array([[0.0, -1.0, 0.0], [0.6, 0.0, -0.8], [0.8, 0.0, 0.6]])
+    believed = pin.SE3(b_rot, np.array([0.5, -0.2, 0.1]))
+    psi, theta = np.radians(30.0), np.radians(10.0)
+    true = Misalignment(x=0.003, y=-0.002, yaw_deg=30.0, tilt_deg=10.0).apply(believed)
+    assert np.allclose(true.translation, believed.translation + b_rot @ [0.003, -0.002, 0.0], atol=1e-15)
+    assert np.allclose(true.rotation[:, 0], b_rot @ [np.cos(psi), np.sin(psi), 0.0], atol=1e-15)
+    z = [np.sin(theta) * np.sin(psi), -np.sin(theta) * np.cos(psi), np.cos(theta)]
+    assert np.allclose(true.rotation[:, 2], b_rot @ z, atol=1e-15)
+
+
+#: the components in the order of their streams (docs/sweeps.md: i = 0, 1, 2, 3), each with
+#: a range that is neither symmetric nor starting at 0
+STREAMS = (
+    ("x", [0.001, 0.004]),
+    ("y", [-0.003, -0.001]),
+    ("yaw_deg", [10.0, 40.0]),
+    ("tilt_deg", [-2.0, 5.0]),
+)
+
+
+@pytest.mark.parametrize("seed", [0, 7, 123456789])
+def test_a_drawn_component_is_low_plus_width_times_the_first_uniform_of_its_stream(seed):
+    """value = low + (high − low)·u, u the first uniform number of the stream
+    numpy.random.default_rng(SeedSequence([seed, i])), i the component's index (x, y, yaw,
+    tilt): one stream per (seed, component), whatever else is drawn."""
+    drawn = draw({f"{name}_range": bounds for name, bounds in STREAMS} | {"seed": seed})
+    for i, (name, (low, high)) in enumerate(STREAMS):
+        u = np.random.default_rng(np.random.SeedSequence([seed, i])).random()
+        assert getattr(drawn, name) == pytest.approx(low + (high - low) * u, rel=1e-12, abs=0.0), name
+        alone = draw({f"{name}_range": [low, high], "seed": seed})
+        assert getattr(alone, name) == getattr(drawn, name), name
+    assert drawn.seed == seed
+
+
+def test_a_range_of_one_value_draws_it_and_a_reversed_range_is_refused():
+    """[a, a] is a range (low <= high) and draws a; [high, low] is refused, naming it."""
+    assert draw({"x_range": [0.002, 0.002], "seed": 3}).x == 0.002
+    with pytest.raises(
+        ValueError, match=r"task\.misalignment\.x_range must be \[low, high\] with low <= high"
+    ):
+        draw({"x_range": [0.002, 0.0015], "seed": 3})
+
+
+def test_a_fixed_component_passes_through_and_cannot_be_drawn_as_well():
+    fixed = draw({"x": 0.001, "yaw_deg": 5.0, "tilt_deg": -2.0, "seed": 4})
+    assert fixed == Misalignment(x=0.001, yaw_deg=5.0, tilt_deg=-2.0, seed=None)
+    with pytest.raises(ValueError, match=r"task\.misalignment\.x = 0\.001 and task\.misalignment\.x_range"):
+        draw({"x": 0.001, "x_range": [0.0, 0.002], "seed": 4})
+
+
+@pytest.mark.parametrize("tilt", [60.0, -60.0, 75.0, -75.0])
+def test_a_tilt_of_60_degrees_or_more_either_way_is_refused(tilt):
+    """|tilt| < 60° (the socket would face sideways): fixed or drawn, ±60° itself refused."""
+    with pytest.raises(ValueError, match=r"task\.misalignment\.tilt_deg must be within ±60 deg"):
+        draw({"tilt_deg": tilt})
+    with pytest.raises(ValueError, match=r"task\.misalignment\.tilt_deg must be within ±60 deg"):
+        draw({"tilt_deg_range": [tilt, tilt], "seed": 0})
+    assert draw({"tilt_deg": np.copysign(59.99, tilt)}).tilt_deg == np.copysign(59.99, tilt)
+
+
+@pytest.mark.parametrize(
+    "settings, key",
+    [
+        ({"x": float("nan")}, "task.misalignment.x must be finite"),
+        ({"y": float("inf")}, "task.misalignment.y must be finite"),
+        ({"x_range": [0.0, float("inf")], "seed": 0}, "task.misalignment.x_range must be [low, high]"),
+        ({"yaw_deg_range": [1.0], "seed": 0}, "task.misalignment.yaw_deg_range must be [low, high]"),
+        (
+            {"yaw_deg_range": [0.0, 1.0, 2.0], "seed": 0},
+            "task.misalignment.yaw_deg_range must be [low, high]",
+        ),
+        ({"x_range": [0.0, 0.001], "seed": -1}, "task.misalignment.seed must be an integer >= 0"),
+        ({"x_range": [0.0, 0.001], "seed": None}, "task.misalignment.seed must be an integer >= 0"),
+    ],
+)
+def test_meaningless_draw_settings_are_refused_naming_the_setting(settings, key):
+    with pytest.raises(ValueError) as refused:
+        draw(settings)
+    assert key in str(refused.value)
+
+
+def test_the_recorded_keys():
+    """x, y, yaw, tilt as drawn; the lateral distance √(x² + y²) (3-4-5 mm); the seed only
+    when something was drawn; no settings: no misalignment and no seed."""
+    assert Misalignment(x=0.003, y=-0.004, yaw_deg=5.0, tilt_deg=1.5, seed=9).record() == {
+        "misalignment_x_m": 0.003,
+        "misalignment_y_m": -0.004,
+        "misalignment_lateral_m": pytest.approx(0.005, rel=1e-15),
+        "misalignment_yaw_deg": 5.0,
+        "misalignment_tilt_deg": 1.5,
+        "misalignment_seed": 9,
+    }
+    assert draw({"x": 0.001, "seed": 9}).record()["misalignment_seed"] is None
+    assert draw({"x_range": [0.0, 0.001], "seed": 9}).record()["misalignment_seed"] == 9
+    assert draw(None) == Misalignment() and draw(None).record()["misalignment_seed"] is None
+
+
 @pytest.mark.parametrize(
     "overrides, message",
     [
@@ -128,6 +240,16 @@ def test_large_misalignment_fails_the_gate_and_says_why(tmp_path):
     assert record["status"] == "ok" and record["success"] is False
     assert "off the axis: tip up to 20 mm from the socket axis" in record["gate_failures"]
     assert record["seat_lateral_error_m"] > 0.015  # measured against the TRUE socket
+    # the plug comes down the believed axis: it first touches 20 mm from the TRUE one
+    assert record["first_contact_lateral_offset_m"] == pytest.approx(0.02, abs=1e-4)
+    # the gate's force is the run's axial force (down −z, the believed axis) averaged over
+    # task.force_window = 50 ms: 50 rows at dt = 1 ms
+    ts = read_timeseries(tmp_path, ["t", "fz"])
+    assert np.diff(ts["t"].to_numpy()) == pytest.approx(0.001)
+    axial = ts["fz"].to_numpy()
+    assert record["peak_axial_force_N"] == pytest.approx(np.max(np.abs(axial)), rel=1e-12)
+    window_means = np.convolve(axial, np.full(50, 1 / 50), mode="valid")
+    assert record["filtered_peak_axial_force_N"] == pytest.approx(np.max(np.abs(window_means)), rel=1e-9)
     saved = json.loads((tmp_path / "metrics.json").read_text())
     assert saved["misalignment_x_m"] == 0.02 and saved["misalignment_lateral_m"] == 0.02
     assert saved["misalignment_yaw_deg"] == 0.0 and saved["misalignment_seed"] is None
