@@ -109,7 +109,14 @@ class Simulation:
         # The planner's work is part of the loop's time: its table of every step first.
         self.reference = self.planner.table(np.arange(self.n_steps) * dt)
         self.wrench = wrench
-        self._loop = (read_wrench, reporter, on_step, Reference(), self.reference.row)
+        log = self.telemetry
+        # bound once: MuJoCo's arrays are views made at each attribute access
+        self._loop = (
+            (read_wrench, reporter, on_step, Reference(), self.reference.row, wrench),
+            (model, data, self.scene.arm, log, dt),
+            (data.qpos, data.qvel, data.ctrl, log.state, log.wrench, log.contacts),
+            data.warning[mujoco.mjtWarning.mjWARN_BADQACC],
+        )
         self.steps_done = 0
         self._elapsed = time.perf_counter() - start
 
@@ -118,7 +125,7 @@ class Simulation:
         the loop reads it again at the step, so reading it here changes nothing)."""
         if self._loop is None:
             raise RuntimeError("Simulation.sense_wrench needs Simulation.start() first")
-        self._loop[0]()
+        self._loop[0][0]()
         return self.wrench
 
     def advance(self, n: int) -> int:
@@ -134,15 +141,11 @@ class Simulation:
             raise RuntimeError("Simulation.advance needs Simulation.start() first")
         first = self.steps_done
         last = min(first + max(int(n), 0), self.n_steps)
-        read_wrench, reporter, on_step, ref, row = self._loop
-        model, data, arm = self.scene.model, self.data, self.scene.arm
-        log = self.telemetry
-        dt = model.opt.timestep
-        wrench = self.wrench
-        qpos, qvel, ctrl = data.qpos, data.qvel, data.ctrl
-        log_state, log_w, log_contacts = log.state, log.wrench, log.contacts
+        (read_wrench, reporter, on_step, ref, row, wrench), (model, data, arm, log, dt), arrays, bad_qacc = (
+            self._loop
+        )
+        qpos, qvel, ctrl, log_state, log_w, log_contacts = arrays
         get_state, state_spec = mujoco.mj_getState, STATE_LOGGED
-        bad_qacc = data.warning[mujoco.mjtWarning.mjWARN_BADQACC]
         mj_step, update, compute = mujoco.mj_step, arm.update, self.controller.compute
         start = time.perf_counter()
         for k in range(first, last):
