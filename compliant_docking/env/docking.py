@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import copy
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -137,6 +137,7 @@ class DockingEnv(gym.Env):
         self.episode_cfg: DictConfig | None = None
         self.episodes = 0
         self._done = True
+        self._last_terms: dict[str, float] = {}
 
     # ------------------------------------------------------------------ Gymnasium API
     def reset(self, *, seed: int | None = None, options: dict | None = None) -> tuple[np.ndarray, dict]:
@@ -187,45 +188,59 @@ class DockingEnv(gym.Env):
         else:
             obs, after = self._obs, self.potential  # the state is not finite: no shaping
         done = sim.steps_done
-        terminated = error is not None or sim.finished
+        axial = self.telemetry_wrench[first:done].dot(self.axial)
+
+        def reward_terms(success: bool) -> dict[str, float]:
+            return R.terms(
+                self.weights,
+                potential_before=self.potential,
+                potential_after=after,
+                axial_force=axial,
+                budget=self.budget,
+                success=success,
+                diverged=error is not None,
+            )
+
         info: dict[str, Any] = {"t": done * self.dt}
-        success = False
-        if terminated:
-            metrics = self._finish(error)
-            success = bool(metrics.get("success"))
-            info.update(metrics=metrics, is_success=success)
-        terms = R.terms(
-            self.weights,
-            potential_before=self.potential,
-            potential_after=after,
-            axial_force=self.telemetry_wrench[first:done].dot(self.axial),
-            budget=self.budget,
-            success=success,
-            diverged=error is not None,
-        )
+        terminated = error is not None or sim.finished
+        if terminated:  # the gate decides the last step's bonus: terms and return in the record
+            metrics = self._finish(error, reward_terms)
+            terms = self._last_terms
+            info.update(metrics=metrics, is_success=bool(metrics.get("success")))
+        else:
+            terms = reward_terms(False)
         reward = float(sum(terms.values()))
         self.potential, self._obs = after, obs
         self.total += reward
         info["reward_terms"] = terms
-        if terminated:
-            info["metrics"]["env_return"] = self.total
         return obs, reward, terminated, False, info
 
     # ------------------------------------------------------------------ the episode's end
-    def _finish(self, error: Diverged | None) -> dict:
-        """The run's record of the episode (and its run directory with ``env.record_dir``)."""
+    def _finish(self, error: Diverged | None, reward_terms: Callable[[bool], dict[str, float]]) -> dict:
+        """The run's record of the episode (and its run directory with ``env.record_dir``),
+        with the last step's reward terms (their success bonus is the gate's) and the return."""
         from compliant_docking.run.runner import Episode, evaluate, execute
 
         self._done = True
         sim, cfg = self.sim, self.episode_cfg
         assert sim is not None and cfg is not None
+
+        def fields(record: dict) -> dict[str, Any]:
+            self._last_terms = reward_terms(record.get("status") == "ok" and bool(record.get("success")))
+            return {
+                "env_return": self.total + sum(self._last_terms.values()),
+                "env_policy_steps": math.ceil(sim.steps_done / self.policy_steps),
+                "env_policy_step_s": float(self.settings.policy_step),
+                "env_action": self.settings.action.kind.value,
+            }
+
         record_dir = self.settings.record_dir
         if record_dir:
             episode = Episode(
                 simulation=sim,
                 error=error,
                 overrides=[*self.run_overrides, f"task.misalignment.seed={self.seed_used}"],
-                fields=self._fields(),
+                fields=fields,
             )
             out = claim_directory(Path(record_dir), f"episode_{self.episodes:05d}_seed{self.seed_used}")
             written = execute(cfg, out, figures=False, echo=False, episode=episode)
@@ -237,15 +252,9 @@ class DockingEnv(gym.Env):
             record["error"] = str(error)
         else:
             record.update(evaluate(sim, None, figures=False))
-        record.update(steps=sim.steps_done, sim_time_s=sim.steps_done * self.dt, **self._fields())
+        record.update(steps=sim.steps_done, sim_time_s=sim.steps_done * self.dt)
+        record.update(fields(record))
         return record
-
-    def _fields(self) -> dict[str, Any]:
-        return {
-            "env_policy_step_s": float(self.settings.policy_step),
-            "env_action": self.settings.action.kind.value,
-            "env_policy_steps": math.ceil(self.sim.steps_done / self.policy_steps),  # type: ignore[union-attr]
-        }
 
 
 def claim_directory(root: Path, name: str) -> Path:

@@ -16,7 +16,7 @@ import sys
 import threading
 import time
 import traceback
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -52,12 +52,13 @@ class Episode:
     :func:`execute` to record instead of simulating: ``simulation`` (prepared from the
     config given to execute and run as far as it went), ``error`` (the :class:`Diverged`
     that ended it, or None), ``overrides`` (the job's overrides, written to
-    ``.hydra/overrides.yaml`` with the config) and ``fields`` (more record fields)."""
+    ``.hydra/overrides.yaml`` with the config) and ``fields`` (more record fields, given
+    the record so far: an episode's return counts the gate's bonus)."""
 
     simulation: Any
     error: Exception | None = None
     overrides: list[str] = field(default_factory=list)
-    fields: dict[str, Any] = field(default_factory=dict)
+    fields: Callable[[dict], dict[str, Any]] | None = None
 
 
 def execute(
@@ -137,8 +138,8 @@ def execute(
             )
             record["loop_wall_time_s"] = sim.loop_wall_time or None
             record.update(sim.controller.diagnostics())
-        if episode is not None:
-            record.update(episode.fields)
+        if episode is not None and episode.fields is not None:
+            record.update(episode.fields(record))
         if interrupted is None and cfg.get("render") is not None and cfg.render.name != "none":
             from compliant_docking.viz.render import record_video
 
