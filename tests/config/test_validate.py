@@ -21,7 +21,7 @@ from omegaconf import DictConfig, ListConfig, OmegaConf
 from omegaconf.errors import OmegaConfBaseException
 
 from compliant_docking import CONF_DIR
-from compliant_docking.config import geometry, schemas
+from compliant_docking.config import env, geometry, schemas
 from compliant_docking.config.ranges import Range, field_range, show
 from compliant_docking.config.store import _SCHEMAS
 from compliant_docking.config.validate import (
@@ -62,7 +62,7 @@ def _is_numeric(annotation) -> bool:
 def _schema_classes() -> list[type]:
     return [
         obj
-        for module in (schemas, geometry)
+        for module in (schemas, geometry, env)
         for obj in vars(module).values()
         if dataclasses.is_dataclass(obj) and obj.__module__ == module.__name__
     ]

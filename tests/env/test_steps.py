@@ -35,7 +35,11 @@ def test_reset_draws_the_misalignment_of_the_same_seed_as_a_run():
     again, info_again = env.reset(seed=7)
     assert np.array_equal(obs, again) and info == info_again
     run = misalignment.draw(make_cfg(*DRAWN, "task.misalignment.seed=7").task.misalignment)
-    assert info["seed"] == 7 and info["misalignment_x_m"] == run.x and info["misalignment_tilt_deg"] == run.tilt_deg
+    assert (
+        info["seed"] == 7
+        and info["misalignment_x_m"] == run.x
+        and info["misalignment_tilt_deg"] == run.tilt_deg
+    )
     assert env.sim.scene.socket.misalignment == run  # the scene's true socket: the run's
     _, other = env.reset(seed=8)
     assert other["misalignment_x_m"] != run.x
