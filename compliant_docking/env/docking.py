@@ -23,7 +23,7 @@ import gymnasium as gym
 import numpy as np
 from omegaconf import DictConfig
 
-from compliant_docking.env import reward as R
+import compliant_docking.env.reward as R
 from compliant_docking.env.actions import make_action
 from compliant_docking.env.observation import Observer, observation_names
 from compliant_docking.sim.simulate import Diverged, Simulation, prepare
