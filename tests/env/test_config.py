@@ -72,36 +72,9 @@ def test_a_run_config_and_settings_composed_elsewhere_are_taken_as_given():
     assert math.isclose(again.dt, 0.001)
 
 
-def test_every_numeric_setting_refuses_nan_inf_and_out_of_range():
-    """Generated from the schema's declared ranges, as for a run's groups
-    (tests/config/test_validate.py): each bad value is refused naming its key and value."""
-    import dataclasses
+def test_the_settings_file_sets_every_field_of_its_schema():
+    from omegaconf import OmegaConf
 
-    from omegaconf import DictConfig, OmegaConf
-
-    from compliant_docking.config.ranges import field_range, show
     from compliant_docking.config.store import load_env_config
-    from compliant_docking.config.validate import settings_problems
 
-    cfg = load_env_config()
-    assert settings_problems(cfg, "env") == []
-    cases, failures = 0, []
-
-    def leaves(node: DictConfig, prefix: str):
-        fields = {f.name: f for f in dataclasses.fields(OmegaConf.get_type(node))}
-        for name in node:
-            if isinstance(node._get_node(name), DictConfig):
-                yield from leaves(node[name], f"{prefix}.{name}")
-            elif (rng := field_range(fields[str(name)])) is not None:
-                yield f"{prefix}.{name}", node, name, rng
-
-    for key, node, name, rng in list(leaves(cfg.env, "env")):
-        saved = node[name]
-        for bad in [math.nan, math.inf] + ([rng.outside()] if rng.outside() is not None else []):
-            cases += 1
-            node[name] = bad
-            problems = settings_problems(cfg, "env")
-            node[name] = saved
-            if not any(key in p and show(bad) in p for p in problems):
-                failures.append(f"{key}={bad}: {problems}")
-    assert cases >= 3 * 8 and not failures, failures
+    assert not OmegaConf.missing_keys(load_env_config().env)
