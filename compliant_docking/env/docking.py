@@ -13,6 +13,7 @@ terms every step and, at the end, the run's metrics (``metrics``, ``is_success``
 
 from __future__ import annotations
 
+import contextlib
 import copy
 import math
 from collections.abc import Callable, Sequence
@@ -26,6 +27,7 @@ from omegaconf import DictConfig
 import compliant_docking.env.reward as R
 from compliant_docking.env.actions import make_action
 from compliant_docking.env.observation import Observer, observation_names
+from compliant_docking.sim import mjlog
 from compliant_docking.sim.simulate import Diverged, Simulation, prepare
 
 #: the id it is registered under (compliant_docking.env)
@@ -138,6 +140,8 @@ class DockingEnv(gym.Env):
         self.episodes = 0
         self._done = True
         self._last_terms: dict[str, float] = {}
+        self._warnings: list[str] = []  # MuJoCo's, during the episode (never MUJOCO_LOG.TXT)
+        self._capture = contextlib.ExitStack()
 
     # ------------------------------------------------------------------ Gymnasium API
     def reset(self, *, seed: int | None = None, options: dict | None = None) -> tuple[np.ndarray, dict]:
@@ -147,6 +151,8 @@ class DockingEnv(gym.Env):
         draw = int(seed) if seed is not None else int(self.np_random.integers(0, MAX_SEED))
         cfg = copy.deepcopy(self.cfg)
         cfg.task.misalignment.seed = draw
+        self._capture.close()  # an episode left unfinished
+        self._warnings = self._capture.enter_context(mjlog.captured())
         sim = prepare(cfg)
         self.action_mode.bind(sim)
         sim.start()
@@ -222,6 +228,7 @@ class DockingEnv(gym.Env):
         from compliant_docking.run.runner import Episode, evaluate, execute
 
         self._done = True
+        self._capture.close()
         sim, cfg = self.sim, self.episode_cfg
         assert sim is not None and cfg is not None
 
@@ -241,6 +248,7 @@ class DockingEnv(gym.Env):
                 error=error,
                 overrides=[*self.run_overrides, f"task.misalignment.seed={self.seed_used}"],
                 fields=fields,
+                mujoco_warnings=self._warnings,
             )
             out = claim_directory(Path(record_dir), f"episode_{self.episodes:05d}_seed{self.seed_used}")
             written = execute(cfg, out, figures=False, echo=False, episode=episode)
@@ -253,8 +261,12 @@ class DockingEnv(gym.Env):
         else:
             record.update(evaluate(sim, None, figures=False))
         record.update(steps=sim.steps_done, sim_time_s=sim.steps_done * self.dt)
-        record.update(fields(record))
+        record.update(fields(record), mujoco_warnings=len(self._warnings))
         return record
+
+    def close(self) -> None:
+        self._capture.close()
+        super().close()
 
 
 def claim_directory(root: Path, name: str) -> Path:

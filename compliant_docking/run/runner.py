@@ -52,13 +52,15 @@ class Episode:
     :func:`execute` to record instead of simulating: ``simulation`` (prepared from the
     config given to execute and run as far as it went), ``error`` (the :class:`Diverged`
     that ended it, or None), ``overrides`` (the job's overrides, written to
-    ``.hydra/overrides.yaml`` with the config) and ``fields`` (more record fields, given
-    the record so far: an episode's return counts the gate's bonus)."""
+    ``.hydra/overrides.yaml`` with the config), ``fields`` (more record fields, given
+    the record so far: an episode's return counts the gate's bonus) and
+    ``mujoco_warnings`` (MuJoCo's warnings while it was stepped: ``sim.mjlog.captured``)."""
 
     simulation: Any
     error: Exception | None = None
     overrides: list[str] = field(default_factory=list)
     fields: Callable[[dict], dict[str, Any]] | None = None
+    mujoco_warnings: list[str] = field(default_factory=list)
 
 
 def execute(
@@ -100,6 +102,8 @@ def execute(
     sim = None
     interrupted: KeyboardInterrupt | None = None
     with mjlog.captured() as mujoco_warnings:  # never MUJOCO_LOG.TXT in the working directory
+        if episode is not None:
+            mujoco_warnings.extend(episode.mujoco_warnings)
         try:
             validate(cfg)  # the command line did already; a run from Python gets the same checks
             show: Any = None

@@ -4,6 +4,7 @@ on the setpoint, the gains and the torque, and an episode's end."""
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
@@ -11,7 +12,6 @@ import pytest
 
 from compliant_docking.env import make_env
 from compliant_docking.sim import misalignment
-from compliant_docking.sim.simulate import Diverged
 from tests.helpers import make_cfg, push_at_tcp
 
 SHORT = ("trajectory.duration=1", "task.settle_time=1", "task.progress=false")
@@ -144,16 +144,19 @@ def test_the_episode_ends_at_the_run_s_end_with_its_metrics():
         env.step(np.zeros(9))
 
 
-def test_a_diverged_episode_terminates_with_its_penalty(monkeypatch):
-    env = make_env(*SHORT)
+def test_a_diverged_episode_terminates_with_its_penalty_and_keeps_mujoco_s_warnings(tmp_path, monkeypatch):
+    """A non-finite joint speed: the loop stops the run as diverged at its first check, the
+    episode ends with the penalty, and MuJoCo's warning goes to the record and the run
+    directory's mujoco.log, never to MUJOCO_LOG.TXT in the working directory."""
+    monkeypatch.chdir(tmp_path)
+    env = make_env(*SHORT, f"env.record_dir={tmp_path / 'episodes'}")
     env.reset(seed=0)
-
-    def diverge(n):
-        raise Diverged("simulation diverged at t = 0.000 s: a test")
-
-    monkeypatch.setattr(env.sim, "advance", diverge)
+    env.sim.data.qvel[0] = math.nan
     obs, reward, terminated, truncated, info = env.step(np.zeros(9))
-    assert terminated and not truncated
+    assert terminated and not truncated and np.isfinite(obs).all()
     assert info["reward_terms"]["diverged"] == -env.weights.diverged and reward == -env.weights.diverged
-    assert info["metrics"]["status"] == "failed" and "a test" in info["metrics"]["error"]
-    assert not info["is_success"]
+    metrics = info["metrics"]
+    assert metrics["status"] == "failed" and metrics["error"].startswith("simulation diverged at t = 0.000 s")
+    assert not info["is_success"] and metrics["mujoco_warnings"] == 1
+    assert "Nan, Inf or huge value in QVEL" in (Path(metrics["run_dir"]) / "mujoco.log").read_text()
+    assert not (tmp_path / "MUJOCO_LOG.TXT").exists()
