@@ -19,6 +19,7 @@ EXTRAS = {
     "tracking": "+tracking=mlflow",
     "cad": "the CAD converter (python -m compliant_docking.interface)",
     "notebook": "make notebook",
+    "env": "the Gymnasium environment (compliant_docking.env)",
 }
 
 

@@ -26,6 +26,7 @@ LAYERS = (
     "viz",
     "run",
     "results",
+    "env",
     "sweep",
     "tracking",
     "tune",

@@ -56,3 +56,10 @@ class SE3Formulation(Enum):
 
     twist = "twist"  # reduced closed form: dexp and ḋexp cancel (fast, default)
     lambda_space = "lambda_space"  # literally through λ̈_ref = −K_V λ̇ − K_P λ + K_F γ
+
+
+class ActionKind(Enum):
+    """What an action of the Gymnasium environment sets (compliant_docking/env/, docs/env.md)."""
+
+    setpoint = "setpoint"  # a pose offset of the controller's setpoint, and gain scales
+    torque = "torque"  # residual joint torques added to the controller's command

@@ -13,6 +13,7 @@ from omegaconf import DictConfig
 
 from compliant_docking import CONF_DIR
 from compliant_docking.config.compose_cache import install as install_compose_cache
+from compliant_docking.config.env import EnvConfig
 from compliant_docking.config.geometry import ContactParams, PlugGeometry, SocketGeometry
 from compliant_docking.config.keyed import KeyedPlugGeometry, KeyedSocketGeometry
 from compliant_docking.config.schemas import (
@@ -67,6 +68,8 @@ def register_schemas() -> None:
     for group, schemas in _SCHEMAS.items():
         for name, node in schemas.items():
             cs.store(group=f"schema/{group}", name=name, node=node)
+    # conf/env/docking.yaml: the Gymnasium environment's keys (load_env_config)
+    cs.store(group="schema/env", name="env", node=EnvConfig)
     # hydra/sweeper=optuna (conf/hydra/sweeper/optuna.yaml): the tuning sweeper's keys
     cs.store(group="schema/sweeper", name="optuna", node=TuningSweeperConfig)
 
@@ -84,6 +87,24 @@ def load_config(*overrides: str) -> DictConfig:
     GlobalHydra.instance().clear()
     with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
         return compose(config_name="config", overrides=list(overrides))
+
+
+def load_env_config(*overrides: str) -> DictConfig:
+    """The Gymnasium environment's settings (conf/env/docking.yaml) with ``overrides``
+    (``"env.policy_step=0.02"``), as a config whose one node is ``env``.
+
+    Composed on their own, not into a run's config: a run has no ``env`` node, so the run
+    directory of an episode holds a run's config. :func:`compliant_docking.env.make_env`
+    sends the ``env.*`` overrides here and the others to :func:`load_config`.
+    """
+    from hydra import compose, initialize_config_dir
+    from hydra.core.global_hydra import GlobalHydra
+
+    install_compose_cache()
+    register_schemas()
+    GlobalHydra.instance().clear()
+    with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
+        return compose(config_name="env/docking", overrides=list(overrides))
 
 
 def default_interface() -> tuple[PlugGeometry, SocketGeometry, ContactParams]:

@@ -100,6 +100,12 @@ def check(cfg: DictConfig) -> list[str]:
     return found
 
 
+def settings_problems(cfg: DictConfig, key: str) -> list[str]:
+    """Every problem of the node ``cfg[key]`` with its schema's ranges (unknown keys, NaN/inf,
+    out of range), for settings composed outside a run's config (``env``)."""
+    return _walk(cfg, key, _choice(cfg, key))
+
+
 # --------------------------------------------------------------------------- keys and ranges
 def _walk(parent: DictConfig, key: str, choice: str | None, prefix: str = "") -> list[str]:
     """The problems of the node ``parent[key]`` (full key ``prefix + key``)."""

@@ -68,6 +68,8 @@ class ImpedanceController(Controller):
                 np.diag(W_inv) if self.use_force_feedback else np.zeros((6, 6)),
             ]
         )
+        self._G_config = self.G.copy()  # the config's gains (set_stiffness_scales(1, 1, 1))
+        self._gains = (W_inv, K, D)
         self._w_inv_m = 1.0 / float(m)
         self._z = np.zeros(18)
         self._z_pos, self._z_rot = self._z[0:3], self._z[3:6]
@@ -77,6 +79,31 @@ class ImpedanceController(Controller):
         # the deviation from §1 that keeps the delayed force feedback stable (None: off, or
         # no force feedback: no such loop, the law stays §1's)
         self.inertia_floor = inertia_floor(1.0 / W_inv, apparent_inertia_floor, self.use_force_feedback)
+
+    def set_stiffness_scales(self, lateral: float, axial: float, rotational: float) -> None:
+        """Scale the config's stiffness across and along the docking axis and about every axis
+        (the damping by the square roots: each direction keeps its damping ratio), from the
+        next step on; (1, 1, 1) restores the config's gains bit for bit. The Gymnasium
+        environment's gain action (docs/env.md).
+
+        Translation: K = k·(s_lat (I − a aᵀ) + s_ax a aᵀ), D likewise with √s, a the docking
+        axis; rotation: k_rot·s_rot, d_rot·√s_rot.
+        """
+        scales = (float(lateral), float(axial), float(rotational))
+        if not all(np.isfinite(scales)) or min(scales) <= 0.0:
+            raise ValueError(f"stiffness scales must be finite and > 0, got {scales}")
+        if scales == (1.0, 1.0, 1.0):
+            self.G[:] = self._G_config
+            return
+        W_inv, K, D = self._gains
+        a = np.asarray(self.ctx.axis, dtype=float)
+        along = np.outer(a, a)
+        across = np.eye(3) - along
+        lat, ax, rot = scales
+        self.G[:3, :3] = W_inv[0] * K[0] * (lat * across + ax * along)
+        self.G[:3, 6:9] = W_inv[0] * D[0] * (np.sqrt(lat) * across + np.sqrt(ax) * along)
+        self.G[3:6, 3:6] = np.diag(W_inv[3:] * K[3:] * rot)
+        self.G[3:6, 9:12] = np.diag(W_inv[3:] * D[3:] * np.sqrt(rot))
 
     def compute(self, t: float, state: ArmModel, ref: Reference, wrench: np.ndarray) -> np.ndarray:
         arm = state

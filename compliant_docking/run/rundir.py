@@ -231,6 +231,17 @@ def natural_key(path: Path) -> list:
 
 
 # --------------------------------------------------------------------------- overrides
+def write_hydra_files(job_dir: Path, config: Any, overrides: list[str]) -> None:
+    """``.hydra/config.yaml`` and ``.hydra/overrides.yaml`` as Hydra writes them for a run,
+    for a job Hydra did not start (a Gymnasium episode): ``config`` a composed config."""
+    from omegaconf import OmegaConf
+
+    folder = Path(job_dir) / HYDRA_DIR
+    folder.mkdir(parents=True, exist_ok=True)
+    atomic_write_text(folder / CONFIG_FILE, OmegaConf.to_yaml(config))
+    atomic_write_text(folder / OVERRIDES_FILE, yaml.safe_dump(list(overrides), default_flow_style=False))
+
+
 def read_overrides(job_dir: Path) -> dict[str, Any]:
     """The job's command-line overrides (``.hydra/overrides.yaml``) as {key: value}.
 

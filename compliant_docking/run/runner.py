@@ -16,7 +16,8 @@ import sys
 import threading
 import time
 import traceback
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -45,7 +46,31 @@ class Terminated(KeyboardInterrupt):
     signum = signal.SIGTERM
 
 
-def execute(cfg: DictConfig, out_dir: Path, *, figures: bool | None = None, echo: bool = True) -> dict:
+@dataclass
+class Episode:
+    """A simulation stepped elsewhere (a Gymnasium episode, compliant_docking/env/), for
+    :func:`execute` to record instead of simulating: ``simulation`` (prepared from the
+    config given to execute and run as far as it went), ``error`` (the :class:`Diverged`
+    that ended it, or None), ``overrides`` (the job's overrides, written to
+    ``.hydra/overrides.yaml`` with the config), ``fields`` (more record fields, given
+    the record so far: an episode's return counts the gate's bonus) and
+    ``mujoco_warnings`` (MuJoCo's warnings while it was stepped: ``sim.mjlog.captured``)."""
+
+    simulation: Any
+    error: Exception | None = None
+    overrides: list[str] = field(default_factory=list)
+    fields: Callable[[dict], dict[str, Any]] | None = None
+    mujoco_warnings: list[str] = field(default_factory=list)
+
+
+def execute(
+    cfg: DictConfig,
+    out_dir: Path,
+    *,
+    figures: bool | None = None,
+    echo: bool = True,
+    episode: Episode | None = None,
+) -> dict:
     """Run the job of ``cfg`` into ``out_dir``; returns the metrics record.
 
     The record starts with the fields naming the job (config choices, overrides). A
@@ -54,6 +79,8 @@ def execute(cfg: DictConfig, out_dir: Path, *, figures: bool | None = None, echo
     status "interrupted" with the time series simulated so far, then raised again so the
     caller stops. ``figures``: draw the per-run figures; None: as the config's
     ``figures`` says for a single run (:func:`compliant_docking.run.figures.wanted`).
+    ``episode``: record that simulation instead of simulating ``cfg`` (then ``.hydra/`` is
+    written here, as Hydra writes it for a run).
     """
     from compliant_docking.config.validate import validate
     from compliant_docking.sim import mjlog
@@ -66,12 +93,17 @@ def execute(cfg: DictConfig, out_dir: Path, *, figures: bool | None = None, echo
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     record: dict = {"status": "failed", "error": None, "success": False, **job_identity(cfg)}
+    if episode is not None:
+        rundir.write_hydra_files(out_dir, cfg, episode.overrides)
+        record["overrides"] = " ".join(episode.overrides) or None
     record.update(dict.fromkeys(DOCKING_KEYS))
     record.update(dict.fromkeys(CONTACT_KEYS), gate_verdict=None)
     record.update(misalignment_record(cfg))  # true vs believed socket pose (flat keys)
     sim = None
     interrupted: KeyboardInterrupt | None = None
     with mjlog.captured() as mujoco_warnings:  # never MUJOCO_LOG.TXT in the working directory
+        if episode is not None:
+            mujoco_warnings.extend(episode.mujoco_warnings)
         try:
             validate(cfg)  # the command line did already; a run from Python gets the same checks
             show: Any = None
@@ -79,10 +111,16 @@ def execute(cfg: DictConfig, out_dir: Path, *, figures: bool | None = None, echo
                 from compliant_docking.viz import viewer as show
 
                 show.check_allowed()
-            sim = prepare(cfg)
-            sim.run(
-                progress=bool(cfg.task.progress) and echo, on_step=show.RealTimeViewer(sim) if show else None
-            )
+            if episode is None:
+                sim = prepare(cfg)
+                sim.run(
+                    progress=bool(cfg.task.progress) and echo,
+                    on_step=show.RealTimeViewer(sim) if show else None,
+                )
+            else:
+                sim = episode.simulation
+                if episode.error is not None:
+                    raise episode.error
             record.update(evaluate(sim, out_dir, figures=figures))
         except Diverged as exc:
             record["error"] = str(exc)
@@ -104,6 +142,8 @@ def execute(cfg: DictConfig, out_dir: Path, *, figures: bool | None = None, echo
             )
             record["loop_wall_time_s"] = sim.loop_wall_time or None
             record.update(sim.controller.diagnostics())
+        if episode is not None and episode.fields is not None:
+            record.update(episode.fields(record))
         if interrupted is None and cfg.get("render") is not None and cfg.render.name != "none":
             from compliant_docking.viz.render import record_video
 
@@ -168,9 +208,10 @@ def _signals_deferred() -> Iterator[list[int]]:
             signal.signal(signum, handler)
 
 
-def evaluate(sim, out_dir: Path, *, figures: bool) -> dict:
+def evaluate(sim, out_dir: Path | None, *, figures: bool) -> dict:
     """Metrics, gate, time series and figures of a finished simulation (the record's
-    fields they fill); writes the time series and the figures into ``out_dir``."""
+    fields they fill); writes the time series and the figures into ``out_dir`` (None:
+    nothing is written, e.g. an episode's metrics for its ``info``)."""
     from compliant_docking.evaluation import docking as M
     from compliant_docking.evaluation.contact import contact_metrics
 
@@ -245,6 +286,8 @@ def evaluate(sim, out_dir: Path, *, figures: bool) -> dict:
     result["success"] = (complete and not failures) if gated else None
     result["gate_failures"] = "; ".join(failures) or None
 
+    if out_dir is None:
+        return result
     rundir.write_timeseries(out_dir, ts)
     if figures:
         run_figures.draw(

@@ -5,7 +5,9 @@
 :func:`prepare` builds the scene, the Pinocchio arm, the start posture, the planner and
 the controller (heavy objects are made here, inside the job, never at import time).
 :meth:`Simulation.run` runs the loop and returns the :class:`Telemetry`; it stops early,
-raising :class:`Diverged`, if the physics blows up.
+raising :class:`Diverged`, if the physics blows up. The loop is one implementation:
+``run`` is :meth:`Simulation.start` then :meth:`Simulation.advance` to the end; the
+Gymnasium environment (compliant_docking/env/) advances it a policy step at a time.
 """
 
 from __future__ import annotations
@@ -61,40 +63,92 @@ class Simulation:
     telemetry: Telemetry
     loop_wall_time: float = 0.0
     notes: list[str] = field(default_factory=list)
-    reference: ReferenceTable | None = None  # the planner's table, made by run()
+    reference: ReferenceTable | None = None  # the planner's table, made by start()
+    steps_done: int = 0  # steps simulated so far: the index of the next one
+    # the wrench handed to the controller at the last step (start() makes it)
+    wrench: np.ndarray = field(default_factory=lambda: np.zeros(6), init=False)
+    _loop: tuple | None = field(default=None, init=False, repr=False)  # the loop's bindings
+    _elapsed: float = field(default=0.0, init=False, repr=False)
 
     @property
     def complete(self) -> bool:
         """Whether the run covers the whole planned trajectory."""
         return self.telemetry.count * self.scene.model.opt.timestep >= self.planner.duration - 1e-9
 
+    @property
+    def finished(self) -> bool:
+        """Whether all ``n_steps`` steps are simulated."""
+        return self.steps_done >= self.n_steps
+
     def run(self, progress: bool = False, on_step: Callable[[int], None] | None = None) -> Telemetry:
         """Simulate ``n_steps`` steps; raises :class:`Diverged` when the physics blows up.
 
-        ``on_step(k)``, if given, is called after step k's ``mj_step`` (``data`` then holds
-        the state at t = (k + 1)·dt), e.g. to pace an interactive viewer; None (the
-        default) costs one ``is not None`` test per step.
-
-        The torque clip is MuJoCo's actuator ``ctrlrange`` (set to ±robot.max_torque by the
-        scene), so the loop writes the command and the log keeps it; the applied torque
-        and the saturation flag follow from it after the loop.
+        The same loop as :meth:`start` then :meth:`advance` until the end (the Gymnasium
+        environment advances it a policy step at a time). ``on_step(k)``, if given, is
+        called after step k's ``mj_step`` (``data`` then holds the state at
+        t = (k + 1)·dt), e.g. to pace an interactive viewer; None (the default) costs one
+        ``is not None`` test per step.
         """
-        model, data, arm = self.scene.model, self.data, self.scene.arm
-        log = self.telemetry
+        self.start(progress=progress, on_step=on_step)
+        self.advance(self.n_steps)
+        return self.telemetry
+
+    def start(self, progress: bool = False, on_step: Callable[[int], None] | None = None) -> None:
+        """Make the planner's table of every step (:attr:`reference`) and the loop's
+        bindings; no step is simulated. The table's time counts in ``loop_wall_time``.
+
+        Between calls of :meth:`advance` the rows of :attr:`reference` not yet simulated
+        may be rewritten (a new setpoint), and ``controller`` replaced by one that wraps it.
+        """
+        model, data = self.scene.model, self.data
         dt = model.opt.timestep
         wrench = np.zeros(6)
         read_wrench = wrench_reader(self.scene, data, wrench)
-        qpos, qvel, ctrl = data.qpos, data.qvel, data.ctrl
-        log_state, log_w, log_contacts = log.state, log.wrench, log.contacts
-        get_state, state_spec = mujoco.mj_getState, STATE_LOGGED
-        bad_qacc = data.warning[mujoco.mjtWarning.mjWARN_BADQACC]
         reporter = _Progress(self.n_steps, dt, enabled=progress)
-        mj_step, update, compute = mujoco.mj_step, arm.update, self.controller.compute
         start = time.perf_counter()
         # The planner's work is part of the loop's time: its table of every step first.
         self.reference = self.planner.table(np.arange(self.n_steps) * dt)
-        row, ref = self.reference.row, Reference()
-        for k in range(self.n_steps):
+        self.wrench = wrench
+        log = self.telemetry
+        # bound once: MuJoCo's arrays are views made at each attribute access
+        self._loop = (
+            (read_wrench, reporter, on_step, Reference(), self.reference.row, wrench),
+            (model, data, self.scene.arm, log, dt),
+            (data.qpos, data.qvel, data.ctrl, log.state, log.wrench, log.contacts),
+            data.warning[mujoco.mjtWarning.mjWARN_BADQACC],
+        )
+        self.steps_done = 0
+        self._elapsed = time.perf_counter() - start
+
+    def sense_wrench(self) -> np.ndarray:
+        """The F/T reading the controller will get at the next step (:attr:`wrench`, updated:
+        the loop reads it again at the step, so reading it here changes nothing)."""
+        if self._loop is None:
+            raise RuntimeError("Simulation.sense_wrench needs Simulation.start() first")
+        self._loop[0][0]()
+        return self.wrench
+
+    def advance(self, n: int) -> int:
+        """Simulate the next ``n`` steps (fewer at the end of the run); returns how many.
+
+        Raises :class:`Diverged` when the physics blows up. The torque clip is MuJoCo's
+        actuator ``ctrlrange`` (set to ±robot.max_torque by the scene), so the loop writes
+        the command and the log keeps it; the applied torque and the saturation flag
+        follow from it after the loop. ``loop_wall_time`` is the time of the table and of
+        every advance that returned.
+        """
+        if self._loop is None:
+            raise RuntimeError("Simulation.advance needs Simulation.start() first")
+        first = self.steps_done
+        last = min(first + max(int(n), 0), self.n_steps)
+        (read_wrench, reporter, on_step, ref, row, wrench), (model, data, arm, log, dt), arrays, bad_qacc = (
+            self._loop
+        )
+        qpos, qvel, ctrl, log_state, log_w, log_contacts = arrays
+        get_state, state_spec = mujoco.mj_getState, STATE_LOGGED
+        mj_step, update, compute = mujoco.mj_step, arm.update, self.controller.compute
+        start = time.perf_counter()
+        for k in range(first, last):
             t = k * dt
             update(qpos, qvel)
             row(k, ref)
@@ -108,7 +162,7 @@ class Simulation:
             if on_step is not None:
                 on_step(k)
             if k % CHECK_EVERY == 0:
-                log.count = k + 1
+                log.count = self.steps_done = k + 1
                 if (
                     bad_qacc.number
                     or not np.isfinite(qvel).all()
@@ -117,10 +171,12 @@ class Simulation:
                 ):
                     raise Diverged(_divergence_reason(t, qvel, tau, bad_qacc.number))
                 reporter.update(k)
-        log.count = self.n_steps
-        self.loop_wall_time = time.perf_counter() - start
-        reporter.done()
-        return log
+        log.count = self.steps_done = last
+        self._elapsed += time.perf_counter() - start
+        self.loop_wall_time = self._elapsed
+        if last == self.n_steps:
+            reporter.done()
+        return last - first
 
 
 def _divergence_reason(t: float, qvel: np.ndarray, tau: np.ndarray, bad_qacc: int) -> str:

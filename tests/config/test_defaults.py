@@ -16,7 +16,7 @@ from hydra.utils import get_class
 from omegaconf import MISSING, OmegaConf
 
 from compliant_docking import CONF_DIR
-from compliant_docking.config import geometry, keyed, schemas, tuning
+from compliant_docking.config import env, geometry, keyed, schemas, tuning
 from compliant_docking.config.store import _SCHEMAS
 from tests.helpers import make_cfg
 
@@ -34,7 +34,11 @@ def _dataclasses(module) -> list[type]:
 
 @pytest.mark.parametrize(
     "cls",
-    _dataclasses(schemas) + _dataclasses(geometry) + _dataclasses(keyed) + _dataclasses(tuning),
+    _dataclasses(schemas)
+    + _dataclasses(geometry)
+    + _dataclasses(keyed)
+    + _dataclasses(tuning)
+    + _dataclasses(env),
     ids=lambda c: c.__name__,
 )
 def test_schemas_carry_no_values(cls):

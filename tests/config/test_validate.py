@@ -21,14 +21,15 @@ from omegaconf import DictConfig, ListConfig, OmegaConf
 from omegaconf.errors import OmegaConfBaseException
 
 from compliant_docking import CONF_DIR
-from compliant_docking.config import geometry, schemas
+from compliant_docking.config import env, geometry, schemas
 from compliant_docking.config.ranges import Range, field_range, show
-from compliant_docking.config.store import _SCHEMAS
+from compliant_docking.config.store import _SCHEMAS, load_env_config
 from compliant_docking.config.validate import (
     BYTES_PER_STEP,
     ConfigError,
     check,
     memory_problem,
+    settings_problems,
     validate,
 )
 from tests.helpers import make_cfg
@@ -44,11 +45,18 @@ COMPANIONS = {
 
 
 def _options() -> list[tuple[str, str]]:
-    return [(group, path.stem) for group in _SCHEMAS for path in sorted((CONF_DIR / group).glob("*.yaml"))]
+    groups = [(group, path.stem) for group in _SCHEMAS for path in sorted((CONF_DIR / group).glob("*.yaml"))]
+    return [*groups, ("env", "docking")]  # the Gymnasium environment's settings, composed on their own
 
 
 def _baseline(group: str, option: str) -> DictConfig:
+    if group == "env":
+        return load_env_config()
     return make_cfg(f"{group}={option}", *COMPANIONS.get((group, option), ()))
+
+
+def _check(cfg: DictConfig, group: str) -> list[str]:
+    return settings_problems(cfg, "env") if group == "env" else check(cfg)
 
 
 # --------------------------------------------------------------------------- the declarations
@@ -62,7 +70,7 @@ def _is_numeric(annotation) -> bool:
 def _schema_classes() -> list[type]:
     return [
         obj
-        for module in (schemas, geometry)
+        for module in (schemas, geometry, env)
         for obj in vars(module).values()
         if dataclasses.is_dataclass(obj) and obj.__module__ == module.__name__
     ]
@@ -136,7 +144,9 @@ def _bad_values(rng: Range) -> list[float]:
 @pytest.mark.parametrize(("group", "option"), _options())
 def test_every_numeric_leaf_refuses_nan_inf_and_out_of_range(group, option):
     cfg = _baseline(group, option)
-    assert check(cfg) == [], f"conf/{group}/{option}.yaml (with {COMPANIONS.get((group, option))}) is refused"
+    assert _check(cfg, group) == [], (
+        f"conf/{group}/{option}.yaml (with {COMPANIONS.get((group, option))}) is refused"
+    )
     failures, cases = [], 0
     for key, container, index, rng, null_size in list(_leaves(cfg[group], group)):
         saved = container._get_node(index)._value()  # raw: keeps an interpolation as it was
@@ -150,7 +160,7 @@ def test_every_numeric_leaf_refuses_nan_inf_and_out_of_range(group, option):
                     failures.append(f"{key}={show(value)}: the type error does not name the key: {exc}")
                 continue
             try:
-                problems = check(cfg)
+                problems = _check(cfg, group)
             finally:
                 container[index] = saved
             named = [p for p in problems if key.split("[")[0] in p]
@@ -158,7 +168,7 @@ def test_every_numeric_leaf_refuses_nan_inf_and_out_of_range(group, option):
                 failures.append(f"{key}={show(value)}: not refused, or not by name: {problems}")
             elif not any(show(bad) in p for p in named):
                 failures.append(f"{key}={show(value)}: the message does not show the value: {named}")
-    assert check(cfg) == []  # every value restored
+    assert _check(cfg, group) == []  # every value restored
     schema = OmegaConf.get_type(cfg[group])
     assert cases > 0 or not any(
         field_range(f) for f in dataclasses.fields(schema)

@@ -58,3 +58,36 @@ def test_without_force_feedback_a_push_no_longer_settles_at_f_over_k():
     sim.run()
     dx = sim.scene.arm.tcp_placement(sim.data.qpos).translation[0] - start.translation[0]
     assert dx > 3.0 * 2.0 / float(sim.cfg.controller.k)  # measured 6.9× F/k
+
+
+def test_scaled_stiffness_settles_at_force_over_the_scaled_stiffness():
+    """set_stiffness_scales (the environment's gain action): across the docking axis k·s_lat,
+    along it k·s_ax, in rotation k_rot·s_rot; a push settles at K⁻¹F."""
+    sim = prepare(make_cfg(*FREE_SPACE, "trajectory.duration=10"))
+    lateral, axial, rotational = 4.0, 2.0, 3.0
+    sim.controller.set_stiffness_scales(lateral, axial, rotational)
+    axis = sim.waypoints.axis  # task.stroke's direction: world −z here
+    assert np.allclose(axis, [0.0, 0.0, -1.0])
+    start = sim.scene.arm.tcp_placement(sim.q0)
+    force, moment = np.array([2.0, -1.0, 1.5]), np.array([0.0, 0.3, 0.0])
+    push_at_tcp(sim, force=force, moment=moment)
+    sim.run()
+    end = sim.scene.arm.tcp_placement(sim.data.qpos)
+    k, k_rot = float(sim.cfg.controller.k), float(sim.cfg.controller.k_rot)
+    expected = force / (k * np.array([lateral, lateral, axial]))
+    displacement = end.translation - start.translation
+    # 0.5 %: the slowest pole is the axial one, −0.96 /s (m, d·√2, 2k), 7e-5 left at 10 s
+    assert np.linalg.norm(displacement - expected) < 0.005 * np.linalg.norm(expected)
+    rotation = pin.log3(end.rotation @ start.rotation.T)
+    assert np.linalg.norm(rotation - moment / (k_rot * rotational)) < 0.005 * np.linalg.norm(moment / k_rot)
+
+
+def test_unit_stiffness_scales_restore_the_configured_gains_bit_for_bit():
+    sim = prepare(make_cfg(*FREE_SPACE, "trajectory.duration=1"))
+    configured = sim.controller.G.copy()
+    sim.controller.set_stiffness_scales(0.3, 7.0, 2.0)
+    assert not np.array_equal(sim.controller.G, configured)
+    sim.controller.set_stiffness_scales(1.0, 1.0, 1.0)
+    assert np.array_equal(sim.controller.G, configured)
+    with pytest.raises(ValueError, match="stiffness scales"):
+        sim.controller.set_stiffness_scales(0.0, 1.0, 1.0)
