@@ -113,8 +113,7 @@ def execute(cfg: DictConfig, out_dir: Path, *, figures: bool | None = None, echo
             rundir.write_mujoco_log(out_dir, mujoco_warnings)
         record["wall_time_s"] = time.perf_counter() - started
         record.update(provenance.collect(cfg, started_at=started_at))  # versions, git, config hash
-        if record["status"] in ("failed", "interrupted"):
-            record["success"] = False
+        record = rundir.consistent(record)  # a job that did not finish never counts as docked
         summary = format_summary(record, cfg) + f"\n  run directory: {display_path(out_dir)}"
         if "video_error" in record:  # render=video: the video, or why there is none
             from compliant_docking.viz.render import summary_line
@@ -260,7 +259,7 @@ def evaluate(sim, out_dir: Path, *, figures: bool) -> dict:
 def exit_status(record: dict) -> int:
     """0: succeeded, or finished with no gate to pass (success null); 1: failed or
     interrupted; 3: gate not passed."""
-    if record.get("status") in ("failed", "interrupted"):
+    if record.get("status") in rundir.FAILED_STATUSES:
         return EXIT_FAILED
     if record.get("status") == "ok" and record.get("success") is None:
         return EXIT_SUCCESS

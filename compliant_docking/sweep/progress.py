@@ -15,7 +15,7 @@ import sys
 import threading
 from pathlib import Path
 
-from compliant_docking.run.rundir import METRICS_FILE, read_metrics
+from compliant_docking.run.rundir import FAILED_STATUSES, METRICS_FILE, read_metrics
 
 #: how often :class:`ProgressWatcher` looks for finished jobs [s]
 POLL_INTERVAL_S = 2.0
@@ -100,7 +100,7 @@ def job_line(out_dir: Path, sweep_dir: Path, total: int | None, done: int | None
         str(status), str(status)
     )
     parts = [f"{count} {out_dir.name}", shown_status]
-    if status not in ("failed", "interrupted"):
+    if status not in FAILED_STATUSES:
         parts.append(docked)
         peak = record.get("peak_axial_force_N")
         parts.append("peak n/a" if peak is None else f"peak {peak:.1f} N")
@@ -109,7 +109,7 @@ def job_line(out_dir: Path, sweep_dir: Path, total: int | None, done: int | None
             parts.append(f"{events:.0f} contact events/s")
     wall = record.get("wall_time_s")
     parts.append("n/a" if wall is None else f"{wall:.1f} s")
-    if status in ("failed", "interrupted") and record.get("error"):
+    if status in FAILED_STATUSES and record.get("error"):
         parts.append(str(record["error"])[:160])
     elif success is False and record.get("gate_verdict"):
         parts.append(str(record["gate_verdict"])[:160])  # what failed
