@@ -79,9 +79,7 @@ class Guard(Callback):
     def on_run_start(self, config: DictConfig, **kwargs: Any) -> None:
         from hydra.core.hydra_config import HydraConfig
 
-        from compliant_docking.config.validate import check
-
-        problems = check(config)
+        problems = job_problems(config)
         if not problems and config.get("viewer"):
             from compliant_docking.viz.viewer import refusal
 
@@ -141,12 +139,21 @@ def job_overrides(config: DictConfig) -> list[list[str]] | None:
     return [list(job) for batch in batches for job in batch]
 
 
+def job_problems(config: DictConfig) -> list[str]:
+    """Every problem of one job's composed config: the config layer's check, then what
+    needs the robot's model or the planner (:mod:`compliant_docking.run.preflight`)."""
+    from compliant_docking.config.validate import check
+    from compliant_docking.run import preflight
+
+    return check(config) or preflight.problems(config)
+
+
 def check_jobs(config: DictConfig, problems: list[str]) -> dict[tuple[str, ...], DictConfig]:
     """Compose and validate every job of the sweep; append the problems (each distinct
     problem once, with the jobs that have it); the composed configs by overrides."""
     from hydra.core.global_hydra import GlobalHydra
 
-    from compliant_docking.config.validate import check, composition_problem
+    from compliant_docking.config.validate import composition_problem
 
     try:
         jobs = job_overrides(config)
@@ -154,7 +161,7 @@ def check_jobs(config: DictConfig, problems: list[str]) -> dict[tuple[str, ...],
         problems.append(composition_problem(exc))
         return {}
     if jobs is None:  # another sweeper: check the primary config only
-        problems += check(config)
+        problems += job_problems(config)
         return {}
     loader = GlobalHydra.instance().config_loader()
     found: dict[str, list[int]] = defaultdict(list)
@@ -166,12 +173,12 @@ def check_jobs(config: DictConfig, problems: list[str]) -> dict[tuple[str, ...],
             found[composition_problem(exc)].append(num)
             continue
         composed[tuple(overrides)] = job
-        job_problems = check(job)
+        problems_of_job = job_problems(job)
         if job.get("viewer"):
             from compliant_docking.viz.viewer import refusal
 
-            job_problems.append(f"{refusal(multirun=True)}.")
-        for problem in job_problems:
+            problems_of_job.append(f"{refusal(multirun=True)}.")
+        for problem in problems_of_job:
             found[problem].append(num)
     for problem, nums in found.items():
         example = f"job {nums[0]}: {' '.join(jobs[nums[0]]) or 'no overrides'}"

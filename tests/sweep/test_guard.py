@@ -90,6 +90,52 @@ def test_a_bad_input_is_refused_before_a_run_directory_is_written(
     ("args", "message"),
     [
         (
+            ("trajectory=twophase", "trajectory.v_max_docking=1e-9"),  # a planner's duration: 1.9e8 s
+            "its logs would need about",
+        ),
+        (
+            tuple(f"robot.{k}=[1,1,1,1,1,1]" for k in ("velocity_limits", "torque_limits", "max_torque"))
+            + ("robot.ik_guess=[0,0.5,0,-1.6,0,1]",),
+            "robot.velocity_limits has 6 values; robot iiwa14 has 7 joints: give one value per joint.",
+        ),
+        (("trajectory=tracking",), "trajectory=tracking is a free-space test and must not touch the docking"),
+        (
+            ("target=none", "trajectory=twophase", "task.init_pos=[0.55,0,0.35]"),
+            "trajectory=twophase needs a goal (a target)",
+        ),
+        (("tool.mjcf=no/such/tool.xml",), "tool.mjcf must name an MJCF file; there is no file "),
+        (("tool.mjcf=assets/iiwa14/iiwa14.xml",), "iiwa14.xml: no body named 'dock'. A tool fragment must"),
+        (("target.mjcf=no/such/target.xml",), "target.mjcf must name an MJCF file; there is no file "),
+        (("robot.mjcf=no/such/robot.xml",), "robot.mjcf must name an MJCF file; there is no file "),
+        (
+            ("robot.ee_site=flange",),
+            "robot.ee_site must be a site of robot.mjcf (attachment_site); got 'flange'.",
+        ),
+        (
+            ("controller=hqp", "controller.eps_abs=5"),
+            "robot.max_torque must exceed 4·controller.eps_abs = 20 N·m for every joint",
+        ),
+    ],
+)
+def test_what_only_the_robot_the_planner_or_the_files_tell_is_refused_up_front(
+    tmp_path, monkeypatch, capsys, args, message
+):
+    """A job the run would refuse once its scene and planner exist is refused before its
+    directory does: the planner's own checks and its duration (the memory of the run),
+    per-joint lists against the robot's joints, the files the run loads."""
+    monkeypatch.chdir(tmp_path)
+    code, err = _main(capsys, *args, "task.progress=false")
+    assert code == 1
+    assert message in err
+    assert err.startswith("compliant-docking: the configuration is refused; nothing was run or written.")
+    assert "Traceback" not in err
+    assert not (tmp_path / "runs").exists()
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (
             ("robot=iiwa14,ur5",),
             "Could not find 'robot/ur5'; Available options in 'robot': fr3, iiwa14 [job 1: robot=ur5",
         ),
@@ -112,6 +158,26 @@ def test_a_bad_sweep_is_refused_before_anything_is_created(tmp_path, monkeypatch
     assert message in err
     assert err.startswith("compliant-docking: the sweep is refused; nothing was run or written.")
     assert "resume" not in err and "Traceback" not in err
+    assert not (tmp_path / "runs").exists()
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (("trajectory=hold,tracking",), "trajectory=tracking is a free-space test"),
+        (
+            ("trajectory=twophase", "trajectory.v_max_docking=0.02,1e-9"),
+            "its logs would need about",
+        ),
+    ],
+)
+def test_a_sweep_whose_planner_refuses_a_job_is_refused_up_front(
+    tmp_path, monkeypatch, capsys, args, message
+):
+    monkeypatch.chdir(tmp_path)
+    code, err = _main(capsys, "-m", *args, "task.progress=false")
+    assert code == 1 and message in err and "[job 1: " in err
+    assert err.startswith("compliant-docking: the sweep is refused; nothing was run or written.")
     assert not (tmp_path / "runs").exists()
 
 
