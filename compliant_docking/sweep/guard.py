@@ -94,12 +94,15 @@ class Guard(Callback):
 
     # -- a sweep
     def on_multirun_start(self, config: DictConfig, **kwargs: Any) -> None:
-        from compliant_docking.sweep.launchers import is_submitit
+        from compliant_docking.sweep.launchers import is_submitit, launcher_problem
         from compliant_docking.sweep.pool import start_early
         from compliant_docking.sweep.workers import stop_early
 
-        workers_started = start_early(config.hydra.launcher)  # they import while the jobs are checked
-        problems: list[str] = []
+        launcher = launcher_problem(config.hydra.launcher)
+        workers_started = not launcher and start_early(
+            config.hydra.launcher
+        )  # they import while the jobs are checked
+        problems: list[str] = [launcher] if launcher else []
         jobs = check_jobs(config, problems)
         composed_for = str(config.hydra.sweep.dir)
         if not problems:

@@ -181,6 +181,18 @@ def test_a_sweep_whose_planner_refuses_a_job_is_refused_up_front(
     assert not (tmp_path / "runs").exists()
 
 
+def test_a_slurm_sweep_without_slurm_is_refused_before_anything_is_created(tmp_path, monkeypatch, capsys):
+    """hydra/launcher=submitit_slurm on a machine without sbatch: before, the sweep directory
+    and an empty "aborted" summary were written and the command exited 0."""
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("PATH", str(tmp_path / "no_slurm_here"))  # no sbatch (nor srun) to find
+    code, err = _main(capsys, "-m", "controller.k=50,60", "hydra/launcher=submitit_slurm", *SHORT_SWEEP)
+    assert code == 1
+    assert err.startswith("compliant-docking: the sweep is refused; nothing was run or written.")
+    assert "hydra/launcher=submitit_slurm needs Slurm, and this machine has no sbatch on its PATH" in err
+    assert not (tmp_path / "runs").exists()
+
+
 def test_an_unwritable_directory_is_refused_before_anything_runs(tmp_path, monkeypatch, capsys):
     monkeypatch.chdir(tmp_path)
     blocker = tmp_path / "a_file"
