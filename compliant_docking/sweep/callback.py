@@ -108,7 +108,7 @@ class SweepCallback(Callback):
     ``resume``: the sweep resumes the one in its directory (set by ``resume=<sweep dir>``).
     ``strict``: exit status 1 when a job failed; false (the tuning presets): a failed job
     is a result like one that did not dock (the tuning sweeper penalises it), and only
-    an aborted sweep exits with 1.
+    an aborted sweep, or one in which every job failed, exits with 1.
     """
 
     def __init__(
@@ -122,12 +122,8 @@ class SweepCallback(Callback):
 
     # -- parent process
     def on_multirun_start(self, config: DictConfig, **kwargs: Any) -> None:
-        resumed: list[str] = []
-        if self.resume:  # before anything is written; SystemExit passes Hydra's callback guard
-            try:
-                resumed = resume.check_sweep(config)
-            except resume.ResumeError as exc:
-                raise SystemExit(resume.fail(exc)) from None
+        # a resume: the guard checked the command against the sweep; say what it will find
+        resumed = resume.status_lines(Path(str(config.hydra.sweep.dir))) if self.resume else []
         self.total = expected_jobs(config)
         sweep_dir = Path(str(config.hydra.sweep.dir))
         independent = is_submitit(config.hydra.launcher)

@@ -60,12 +60,14 @@ def next_count(sweep_dir: Path) -> int | None:
     One exclusive lock (``flock``) on ``<sweep>/.finished_jobs`` around reading the count
     and writing it plus one: constant time per job, whatever the sweep's size, and safe
     across processes (and across machines on a file system with POSIX locks, e.g. NFSv4).
-    None when the file cannot be locked (no count is printed rather than a wrong one).
+    None when the file cannot be locked, or is gone (no count is printed rather than a wrong
+    one): the launching process creates it when the sweep starts and removes it when the
+    sweep is summarised, so a job that ends later (an aborted sweep's) never recreates it.
     """
     try:
         import fcntl
 
-        fd = os.open(Path(sweep_dir) / COUNT_FILE, os.O_RDWR | os.O_CREAT, 0o644)
+        fd = os.open(Path(sweep_dir) / COUNT_FILE, os.O_RDWR)
     except (ImportError, OSError):
         return None
     try:

@@ -136,8 +136,11 @@ class SweepSession:
 
     def discard(self) -> None:
         """The sweep was refused before any job ran (e.g. a tuning set-up that cannot be
-        used): nothing to summarise, neither now nor when the command unwinds."""
+        used): nothing to summarise, neither now nor when the command unwinds, and no count
+        file left behind."""
         self.stop_watcher()
+        if self.sweep_dir is not None:
+            remove_count(self.sweep_dir)
         self.sweep_dir, self.total, self.started = None, None, None
 
     def finish_aborted(self) -> SweepOutcome | None:

@@ -18,7 +18,7 @@ from omegaconf import OmegaConf
 
 from compliant_docking import REPO_ROOT
 from compliant_docking.cli import main
-from compliant_docking.sweep import guard
+from compliant_docking.sweep import directories
 from tests.helpers import SHORT_SWEEP
 
 #: short single runs: 1 s of motion, 1 s of settling
@@ -216,15 +216,15 @@ def test_an_unwritable_directory_is_refused_before_anything_runs(tmp_path, monke
 def test_a_taken_default_name_gets_the_next_free_one(tmp_path):
     run_dir = tmp_path / "runs" / "14-03-12_iiwa14_impedance_quintic"
     cfg = OmegaConf.create({"hydra": {"run": {"dir": str(run_dir)}, "overrides": {"hydra": []}}})
-    assert guard.claim(cfg, "run") is None and run_dir.is_dir()
-    assert guard.claim(cfg, "run") is None and cfg.hydra.run.dir == f"{run_dir}_2"
+    assert directories.claim(cfg, "run") is None and run_dir.is_dir()
+    assert directories.claim(cfg, "run") is None and cfg.hydra.run.dir == f"{run_dir}_2"
     sweep = OmegaConf.create({"hydra": {"sweep": {"dir": str(run_dir)}, "overrides": {"hydra": []}}})
-    assert guard.claim(sweep, "sweep") is None and sweep.hydra.sweep.dir == f"{run_dir}_3"
+    assert directories.claim(sweep, "sweep") is None and sweep.hydra.sweep.dir == f"{run_dir}_3"
     assert list(sweep.hydra.overrides.hydra) == [f"hydra.sweep.dir={run_dir}_3"]  # for the jobs
     explicit = OmegaConf.create(
         {"hydra": {"run": {"dir": str(run_dir)}, "overrides": {"hydra": [f"hydra.run.dir={run_dir}"]}}}
     )
-    assert guard.claim(explicit, "run") is None and explicit.hydra.run.dir == str(run_dir)  # as given
+    assert directories.claim(explicit, "run") is None and explicit.hydra.run.dir == str(run_dir)  # as given
 
 
 def test_a_claimed_directory_that_stayed_empty_is_released(tmp_path):
@@ -232,10 +232,10 @@ def test_a_claimed_directory_that_stayed_empty_is_released(tmp_path):
     empty, used = tmp_path / "empty", tmp_path / "used"
     for path in (empty, used):
         cfg = OmegaConf.create({"hydra": {"sweep": {"dir": str(path)}, "overrides": {"hydra": []}}})
-        assert guard.claim(cfg, "sweep") is None
+        assert directories.claim(cfg, "sweep") is None
     (used / "multirun.yaml").write_text("hydra: {}\n")
-    guard.release_empty()
-    assert not empty.exists() and (used / "multirun.yaml").is_file() and not guard.CLAIMED
+    directories.release_empty()
+    assert not empty.exists() and (used / "multirun.yaml").is_file() and not directories.CLAIMED
 
 
 def _block_the_next_minute(root: Path, pattern: str) -> set[Path]:
