@@ -239,3 +239,63 @@ def test_the_resume_of_an_untouched_sweep_still_finishes_it(finished_sweep, tmp_
     assert "skipped: finished earlier with the same config" in result.stdout
     records = [json.loads(p.read_text()) for p in copy.glob("*/metrics.json")]
     assert len(records) == 2 and all(r["status"] == "ok" for r in records)
+
+
+# --------------------------------------------------------------------------- long job names
+def test_a_job_name_too_long_for_a_file_name_is_shortened_with_a_hash():
+    from compliant_docking.config.resolvers import NAME_BYTES, job_dir
+
+    assert job_dir(3, "controller.k=50,robot=fr3") == "3_controller.k=50,robot=fr3"  # as Hydra named it
+    assert (
+        job_dir(0, "") == "0_"
+        and job_dir(2, "tool.mjcf=assets/x/tool.xml") == "2_tool.mjcf=assets/x/tool.xml"
+    )
+    long = "robot.max_torque=[" + ",".join(["10.000000000001"] * 7) + "]," + "x" * 300
+    name = job_dir(12, long)
+    assert len(name.encode()) <= NAME_BYTES and "/" not in name
+    assert name.startswith("12_robot.max_torque=[10.000000000001,") and name == job_dir(12, long)
+    assert name != job_dir(13, long) and name != job_dir(12, long + "y")  # unique
+    wide = job_dir(1, "task.note=" + "é" * 200)  # two bytes a character: cut between characters
+    assert len(wide.encode()) <= NAME_BYTES and wide.encode().decode() == wide
+
+
+def test_the_sweep_job_directory_template_shortens_long_names():
+    """conf/config.yaml's hydra.sweep.subdir through Hydra's own composition (the resolver is
+    registered wherever the config is used)."""
+    from hydra import compose, initialize_config_dir
+    from hydra.core.global_hydra import GlobalHydra
+
+    from compliant_docking import CONF_DIR
+    from compliant_docking.config import register_schemas
+
+    register_schemas()
+    GlobalHydra.instance().clear()
+    torque = "robot.torque_limits=[" + ",".join(["320.000000000000001"] * 7) + "]"
+    velocity = "robot.velocity_limits=[" + ",".join(["1.48350000000000001"] * 7) + "]"
+    with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
+        cfg = compose("config", overrides=["controller.k=50", torque, velocity], return_hydra_config=True)
+    OmegaConf.set_readonly(cfg.hydra, False)
+    cfg.hydra.job.num = 4
+    cfg.hydra.job.override_dirname = f"controller.k=50,{torque},{velocity}"
+    subdir = str(cfg.hydra.sweep.subdir)
+    assert subdir.startswith("4_controller.k=50,robot.torque_limits=[320.") and len(subdir.encode()) <= 255
+    cfg.hydra.job.override_dirname = "controller.k=50"
+    assert str(cfg.hydra.sweep.subdir) == "4_controller.k=50"
+
+
+@pytest.mark.slow
+def test_a_sweep_with_long_job_names_runs_and_resumes(tmp_path):
+    """Before: the sweep aborted with a traceback (File name too long), and the suggested
+    resume= failed the same way."""
+    torque = "robot.torque_limits=[" + ",".join(["320.000000000000001"] * 7) + "]"
+    velocity = "robot.velocity_limits=[" + ",".join(["1.48350000000000001"] * 7) + "]"
+    sweep = tmp_path / "sweep"
+    first = _sweep(sweep, torque, velocity, f"hydra.sweep.dir={sweep}")
+    assert first.returncode == 0, first.stderr[-3000:]
+    jobs = sorted(p for p in sweep.iterdir() if p.is_dir())
+    assert len(jobs) == 2 and all(
+        len(p.name.encode()) <= 255 and (p / "metrics.json").is_file() for p in jobs
+    )
+    again = _sweep(sweep, torque, velocity, f"resume={sweep}")
+    assert again.returncode == 0, again.stderr[-3000:]
+    assert again.stdout.count("skipped: finished earlier with the same config") == 2
