@@ -2,7 +2,7 @@
 
 Whatever happens, :func:`execute` ends the run directory with a ``metrics.json`` whose
 ``status`` is "ok", "incomplete" (shorter than its trajectory), "failed" (with ``error``:
-a one-line reason) or "interrupted" (Ctrl-C or SIGTERM: the time series so far is kept,
+a one-line reason) or "interrupted" (Ctrl-C, SIGTERM, SIGHUP: the time series so far is kept,
 and the interruption is raised again once the record is written). Every file is written atomically
 (temporary name, then rename), and ``metrics.json`` last, so a directory holding a
 ``metrics.json`` is finished. See docs/run_directory.md for the layout.
@@ -10,13 +10,9 @@ and the interruption is raised again once the record is written). Every file is 
 
 from __future__ import annotations
 
-import contextlib
-import signal
 import sys
-import threading
 import time
 import traceback
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -25,7 +21,7 @@ from omegaconf import DictConfig, OmegaConf
 
 from compliant_docking.evaluation.registry import CONTACT_KEYS, DOCKING_KEYS
 from compliant_docking.run import figures as run_figures
-from compliant_docking.run import provenance, rundir
+from compliant_docking.run import interrupt, provenance, rundir
 from compliant_docking.run.summary import display_path, format_summary
 from compliant_docking.sim.misalignment import record_for as misalignment_record
 
@@ -38,21 +34,16 @@ def _one_line(exc: BaseException) -> str:
     return text if isinstance(exc, (ValueError, RuntimeError)) else f"{type(exc).__name__}: {text}"
 
 
-class Terminated(KeyboardInterrupt):
-    """SIGTERM during a single run (the command line's handler raises it): handled like
-    Ctrl-C, the run is recorded as interrupted and the command exits 143."""
-
-    signum = signal.SIGTERM
-
-
 def execute(cfg: DictConfig, out_dir: Path, *, figures: bool | None = None, echo: bool = True) -> dict:
     """Run the job of ``cfg`` into ``out_dir``; returns the metrics record.
 
     The record starts with the fields naming the job (config choices, overrides). A
     failure of any kind is recorded (status "failed" and the reason), never raised. An
-    interruption (Ctrl-C: KeyboardInterrupt; SIGTERM: :class:`Terminated`) is recorded as
-    status "interrupted" with the time series simulated so far, then raised again so the
-    caller stops. ``figures``: draw the per-run figures; None: as the config's
+    interruption (Ctrl-C, SIGTERM, SIGHUP: a KeyboardInterrupt, :mod:`.interrupt`) is
+    recorded as status "interrupted" with the time series simulated so far, then raised
+    again so the caller stops; one that came while the command held the signals (between
+    the claim of the run directory and this call) is acted on first thing here, so the
+    directory gets its record. ``figures``: draw the per-run figures; None: as the config's
     ``figures`` says for a single run (:func:`compliant_docking.run.figures.wanted`).
     """
     from compliant_docking.config.validate import validate
@@ -73,6 +64,7 @@ def execute(cfg: DictConfig, out_dir: Path, *, figures: bool | None = None, echo
     interrupted: KeyboardInterrupt | None = None
     with mjlog.captured() as mujoco_warnings:  # never MUJOCO_LOG.TXT in the working directory
         try:
+            interrupt.release()  # a signal held since the run directory was claimed: recorded below
             validate(cfg)  # the command line did already; a run from Python gets the same checks
             show: Any = None
             if cfg.get("viewer"):  # MuJoCo's viewer at real time; refused in a sweep or without a display
@@ -92,7 +84,7 @@ def execute(cfg: DictConfig, out_dir: Path, *, figures: bool | None = None, echo
                 traceback.print_exc(file=sys.stderr)
         except KeyboardInterrupt as exc:  # Ctrl-C, SIGTERM: record what there is, then stop
             interrupted = exc
-    with _signals_deferred() as pending:  # a (second) Ctrl-C must not cut the record short
+    with interrupt.deferred() as pending:  # a (second) Ctrl-C must not cut the record short
         if interrupted is not None:
             record.update(_interrupted(sim, out_dir, interrupted))
         if sim is not None:
@@ -125,16 +117,15 @@ def execute(cfg: DictConfig, out_dir: Path, *, figures: bool | None = None, echo
         print(summary)
     if interrupted is not None:
         raise interrupted
-    if pending:  # Ctrl-C or SIGTERM while the record was written: the run is recorded, now stop
-        raise Terminated() if pending[0] == signal.SIGTERM else KeyboardInterrupt()
+    if pending:  # a signal while the record was written: the run is recorded, now stop
+        raise interrupt.Stopped(pending[0])
     return record
 
 
 def _interrupted(sim, out_dir: Path, exc: KeyboardInterrupt) -> dict:
     """The record's fields for a run stopped by ``exc``: status "interrupted", the reason,
     and the metrics and time series of the steps simulated so far."""
-    signum = getattr(exc, "signum", signal.SIGINT)
-    how = {signal.SIGINT: "SIGINT (Ctrl-C)", signal.SIGTERM: "SIGTERM"}.get(signum, f"signal {signum}")
+    how = interrupt.name(interrupt.signum_of(exc))
     fields: dict[str, Any] = {}
     when = " before the simulation started"
     if sim is not None and sim.telemetry.count:
@@ -146,25 +137,6 @@ def _interrupted(sim, out_dir: Path, exc: KeyboardInterrupt) -> dict:
             when += f" (the metrics of the partial run could not be computed: {_one_line(error)})"
     fields.update(status="interrupted", success=False, gate_failures=None, gate_verdict=None)
     return {**fields, "error": f"interrupted by {how}{when}"}
-
-
-@contextlib.contextmanager
-def _signals_deferred() -> Iterator[list[int]]:
-    """Hold SIGINT and SIGTERM while the record is written; the signals that arrived meanwhile
-    are yielded list's items (main thread only: elsewhere Python cannot change handlers)."""
-    pending: list[int] = []
-    if threading.current_thread() is not threading.main_thread():
-        yield pending
-        return
-    saved = {
-        s: signal.signal(s, lambda signum, frame: pending.append(signum))
-        for s in (signal.SIGINT, signal.SIGTERM)
-    }
-    try:
-        yield pending
-    finally:
-        for signum, handler in saved.items():
-            signal.signal(signum, handler)
 
 
 def evaluate(sim, out_dir: Path, *, figures: bool) -> dict:

@@ -48,6 +48,7 @@ from typing import Any
 from hydra.experimental.callback import Callback
 from omegaconf import DictConfig, OmegaConf
 
+from compliant_docking.run import interrupt
 from compliant_docking.sweep.directories import claim, job_dir_problems, job_subdir
 from compliant_docking.sweep.watchdog import start_watchdog
 
@@ -89,6 +90,8 @@ class Guard(Callback):
         if problems:
             raise refuse("the configuration is refused", problems)
         HydraConfig.instance().set_config(config)  # hydra.run.dir reads ${hydra:runtime.choices…}
+        # from the claim on, a signal waits until the runner can record it (run/interrupt.py)
+        interrupt.hold()
         problem = claim(config, "run")
         if problem:
             raise refuse("the run cannot start", [problem])
