@@ -39,7 +39,7 @@ from compliant_docking import CONF_DIR
 from compliant_docking.config import compose_cache, register_schemas
 from compliant_docking.run import interrupt
 from compliant_docking.sweep import launchers, resume
-from compliant_docking.sweep.directories import release_empty
+from compliant_docking.sweep.directories import release_empty, sweep_dir_of
 from compliant_docking.sweep.guard import Refused, refuse
 from compliant_docking.sweep.session import SweepSession
 
@@ -70,7 +70,7 @@ class CommandLine:
                 self.records.append(kept)
                 return resume.SKIPPED
             note = resume.rerun_note(why)  # the progress line says why it runs again
-            resume.prepare_rerun(cfg, out_dir, Path(str(hydra_cfg.sweep.dir)))
+            resume.prepare_rerun(cfg, out_dir, sweep_dir_of(hydra_cfg))
         # in a sweep, each job prints one progress line (SweepCallback), not its summary,
         # and draws no figures unless `figures=true` (report --runs draws them later)
         sweep = hydra_cfg.mode == RunMode.MULTIRUN

@@ -29,6 +29,7 @@ from hydra.experimental.callback import Callback
 from omegaconf import DictConfig
 
 from compliant_docking.sweep import resume
+from compliant_docking.sweep.directories import sweep_dir_of
 from compliant_docking.sweep.launchers import describe, is_submitit
 from compliant_docking.sweep.progress import ProgressWatcher, display, emit, job_line
 from compliant_docking.sweep.session import SweepSession
@@ -153,7 +154,7 @@ class SweepCallback(Callback):
             from hydra.core.utils import JobStatus
 
             out_dir = Path(str(config.hydra.runtime.output_dir))
-            sweep_dir = Path(str(config.hydra.sweep.dir)).resolve()
+            sweep_dir = sweep_dir_of(config.hydra)  # also with hydra.job.chdir=true
             line = job_line(out_dir, sweep_dir, self.total)
             note = job_return.return_value if job_return.status == JobStatus.COMPLETED else None
             if isinstance(note, str):  # resume: skipped, or why it ran again

@@ -164,6 +164,16 @@ def _quoted(path: str) -> str:
         return path
 
 
+def sweep_dir_of(hydra_cfg) -> Path:
+    """The sweep directory of a job, absolute: a relative ``hydra.sweep.dir`` is taken from
+    the directory the command started in (``hydra.runtime.cwd``), also in a job that
+    ``hydra.job.chdir=true`` moved into its own directory."""
+    path = Path(str(hydra_cfg.sweep.dir))
+    if not path.is_absolute():
+        path = Path(str(OmegaConf.select(hydra_cfg, "runtime.cwd") or os.getcwd())) / path
+    return path.resolve()
+
+
 # --------------------------------------------------------------------------- job directories
 def job_subdir(job: DictConfig, num: int) -> str:
     """The directory of job ``num`` relative to its sweep's, as Hydra's ``run_job`` will

@@ -299,3 +299,18 @@ def test_a_sweep_with_long_job_names_runs_and_resumes(tmp_path):
     again = _sweep(sweep, torque, velocity, f"resume={sweep}")
     assert again.returncode == 0, again.stderr[-3000:]
     assert again.stdout.count("skipped: finished earlier with the same config") == 2
+
+
+def test_a_jobs_sweep_directory_is_found_also_after_hydra_job_chdir(tmp_path, monkeypatch):
+    """hydra.job.chdir=true moves a job into its own directory: a relative sweep directory
+    is taken from where the command started (before: the rerun of a resumed job was
+    refused as outside its sweep, and progress lines lost their count)."""
+    from compliant_docking.sweep.directories import sweep_dir_of
+
+    job = tmp_path / "runs" / "sweep" / "0_x"
+    job.mkdir(parents=True)
+    monkeypatch.chdir(job)
+    hydra_cfg = OmegaConf.create({"sweep": {"dir": "runs/sweep"}, "runtime": {"cwd": str(tmp_path)}})
+    assert sweep_dir_of(hydra_cfg) == (tmp_path / "runs" / "sweep").resolve()
+    absolute = OmegaConf.create({"sweep": {"dir": str(tmp_path / "elsewhere")}, "runtime": {"cwd": "/"}})
+    assert sweep_dir_of(absolute) == (tmp_path / "elsewhere").resolve()
