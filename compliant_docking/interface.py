@@ -124,6 +124,13 @@ def export_keyed(directory: str | Path, *overrides: str) -> tuple[Path, Path]:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """``python -m compliant_docking.interface``; the exit status (a signal: 128 + its number)."""
+    from compliant_docking.run import interrupt
+
+    return interrupt.handled("interface", lambda: _main(argv))
+
+
+def _main(argv: list[str] | None) -> int:
     parser = _parser()
     args = parser.parse_args(argv)
     if args.export_keyed:

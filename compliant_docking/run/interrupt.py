@@ -23,8 +23,9 @@ from __future__ import annotations
 
 import contextlib
 import signal
+import sys
 import threading
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 
 #: the signals that stop a command
 SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
@@ -73,6 +74,22 @@ def received() -> int | None:
     """The first stop signal this process received (None: none): an error raised after it
     comes from code the signal cut short, and the command line reports the stop instead."""
     return _received[0] if _received else None
+
+
+def handled(command: str, main: Callable[[], int]) -> int:
+    """Run ``main``, the body of a command other than the simulation's (report, findings,
+    interface), with the stop signals handled as the simulation's are: one line on stderr,
+    exit status 128 + signal number, no traceback. Those commands write each file
+    atomically, so a stop leaves every file as it was or whole."""
+    previous = {s: signal.signal(s, raise_stop) for s in SIGNALS} if _main_thread() else {}
+    try:
+        return main()
+    except KeyboardInterrupt as exc:
+        print(f"{command}: stopped by {name(signum_of(exc))}", file=sys.stderr, flush=True)
+        return exit_status(exc)
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
 
 
 # --------------------------------------------------------------------------- holding

@@ -242,3 +242,44 @@ def test_concurrent_writers_of_one_file_never_collide(tmp_path):
     assert not errors
     assert sorted(p.name for p in tmp_path.iterdir()) == ["figures", "summary.txt"]  # no leftovers
     assert (target / "a.png").stat().st_size == 1008
+
+
+@pytest.mark.parametrize(
+    ("command", "patched", "signum"),
+    [
+        ("report", "compliant_docking.results.report.scan", signal.SIGTERM),
+        ("findings", "compliant_docking.results.findings.load_runs", signal.SIGINT),
+        ("interface", "compliant_docking.interface.convert", signal.SIGHUP),
+    ],
+)
+def test_the_other_commands_stop_on_a_signal_in_one_line(
+    tmp_path, monkeypatch, capsys, command, patched, signum
+):
+    """report, findings and interface: a signal ends them like the simulation's command (one
+    line, 128 + signal number), not with a KeyboardInterrupt traceback."""
+    import importlib
+
+    def signalled(*args, **kwargs):
+        os.kill(os.getpid(), signum)
+        time.sleep(5)  # the handler raises before this ends
+        raise AssertionError("the signal was not acted on")
+
+    monkeypatch.setattr(patched, signalled)
+    main = importlib.import_module(
+        {"report": "compliant_docking.results.report", "findings": "compliant_docking.results.findings",
+         "interface": "compliant_docking.interface"}[command]
+    ).main  # fmt: skip
+    cad = REPO_ROOT / "assets" / "interfaces" / "keyed_cad" / "cad"
+    argv = {
+        "report": [str(tmp_path)],
+        "findings": [str(tmp_path)],
+        "interface": [str(cad / "plug.stl"), str(cad / "socket.stl"), "--out", str(tmp_path / "out")],
+    }[command]
+    handlers = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)}
+    assert main(argv) == 128 + signum
+    err = capsys.readouterr().err
+    assert err.strip().endswith(
+        f"{command}: stopped by {'SIGINT (Ctrl-C)' if signum == signal.SIGINT else signum.name}"
+    )
+    assert "Traceback" not in err
+    assert {s: signal.getsignal(s) for s in handlers} == handlers  # put back
