@@ -30,7 +30,7 @@ from collections.abc import Callable, Iterator
 #: the signals that stop a command
 SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
 #: how a record names each
-NAMES = {signal.SIGINT: "SIGINT (Ctrl-C)", signal.SIGTERM: "SIGTERM", signal.SIGHUP: "SIGHUP"}
+NAMES = {int(signal.SIGINT): "SIGINT (Ctrl-C)", int(signal.SIGTERM): "SIGTERM", int(signal.SIGHUP): "SIGHUP"}
 
 
 class Stopped(KeyboardInterrupt):

@@ -193,7 +193,7 @@ def job_subdir(job: DictConfig, num: int) -> str:
         try:
             return str(OmegaConf.select(clone, "hydra.sweep.subdir"))
         finally:
-            hydra_config.cfg = saved  # type: ignore[assignment]
+            hydra_config.cfg = saved
 
 
 def job_dir_problems(subdirs: dict[int, str]) -> list[str]:

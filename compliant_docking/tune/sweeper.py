@@ -209,6 +209,7 @@ class TuningSweeper(Sweeper):
             corners = [lowest] + [{**lowest, key: v} for key, values in extremes for v in values[1:]]
         cases = [(corner, 0) for corner in corners] + [(lowest, i) for i in range(1, len(plan["draws"]))]
         loader = GlobalHydra.instance().config_loader()
+        assert self.config is not None
         for corner, draw in cases:
             overrides = self._jobs(0, corner, plan)[draw]
             try:
