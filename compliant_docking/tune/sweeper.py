@@ -235,7 +235,10 @@ class TuningSweeper(Sweeper):
                     stored_name = OmegaConf.select(OmegaConf.load(saved), "hydra.sweeper.study_name")
                 except Exception:
                     stored_name = None
-            if stored_name != self.study_name:
+            # a study's own directory: its multirun.yaml names it, or (a command stopped just
+            # after it opened the study) it holds the study alone so far
+            started_here = not saved.is_file() and (sweep_dir / studies.STUDY_FILE).is_file()
+            if stored_name != self.study_name and not started_here:
                 return [
                     f"hydra.sweep.dir={sweep_dir} holds something other than the study "
                     f"{self.study_name!r} (its {MULTIRUN_FILE} names "
@@ -245,9 +248,7 @@ class TuningSweeper(Sweeper):
         url = studies.storage_url(self.storage, sweep_dir)
         try:
             studies.check_stored(self.study_name, url, plan["objective"].directions, plan["definition"])
-        except studies.StudyMismatch as exc:
-            return [_sentence(exc)]
-        except studies.UnreadableStudy as exc:
+        except (studies.StudyMismatch, studies.UnreadableStudy) as exc:
             return [_sentence(exc)]
         return []
 

@@ -15,7 +15,7 @@ import pytest
 from omegaconf import OmegaConf
 
 from compliant_docking import REPO_ROOT
-from compliant_docking.cli import main
+from tests.helpers import cli_in_process
 
 #: a two-job sweep in free space, 0.2 s simulated per job, jobs run in the launching process
 TINY = (
@@ -29,14 +29,6 @@ TINY = (
     "hydra/launcher=basic",
     "hydra.callbacks.sweep.figures=false",
 )
-
-
-def _main(capsys, *args: str) -> tuple[int, str]:
-    try:
-        code = main(list(args))
-    except SystemExit as exc:
-        code = exc.code if isinstance(exc.code, int) else 1
-    return code, capsys.readouterr().err
 
 
 def _tree(path: Path) -> dict[str, bytes]:
@@ -83,7 +75,7 @@ def test_a_sweep_whose_jobs_share_or_leave_its_directory_is_refused(
     tmp_path, monkeypatch, capsys, subdir, message
 ):
     monkeypatch.chdir(tmp_path)
-    code, err = _main(
+    code, err = cli_in_process(
         capsys, "-m", *TINY, f"hydra.sweep.dir={tmp_path / 'sweep'}", f"hydra.sweep.subdir={subdir}"
     )
     assert code == 1 and message in err
@@ -100,7 +92,9 @@ def test_a_run_into_a_used_run_directory_is_refused_and_mixes_nothing(tmp_path, 
     (used / "figures" / "contact_force.png").write_bytes(b"\x89PNG first run")
     (used / "metrics.json").write_text('{"status": "ok", "controller": "first"}')
     before = _tree(used)
-    code, err = _main(capsys, "trajectory.duration=0.2", "task.progress=false", f"hydra.run.dir={used}")
+    code, err = cli_in_process(
+        capsys, "trajectory.duration=0.2", "task.progress=false", f"hydra.run.dir={used}"
+    )
     assert code == 1
     assert (
         f"hydra.run.dir={used} is not empty (figures, metrics.json): a run writes into a new or empty" in err
@@ -118,7 +112,7 @@ def test_a_sweep_into_a_used_sweep_directory_is_refused_and_keeps_it_resumable(t
     (used / "0_controller.k=50" / "metrics.json").write_text('{"status": "ok"}')
     (used / "multirun.yaml").write_text("hydra: {overrides: {task: [controller.k=50]}}\n")
     before = _tree(used)
-    code, err = _main(capsys, "-m", *TINY, f"hydra.sweep.dir={used}")
+    code, err = cli_in_process(capsys, "-m", *TINY, f"hydra.sweep.dir={used}")
     assert code == 1
     assert f"hydra.sweep.dir={used} is not empty (0_controller.k=50, multirun.yaml)" in err
     assert f"to finish the sweep in it, run that sweep's command with resume={used}" in err
@@ -131,11 +125,11 @@ def test_an_explicit_directory_inside_a_sweep_is_refused(tmp_path, monkeypatch, 
     sweep = tmp_path / "sweep"
     sweep.mkdir()
     (sweep / "multirun.yaml").write_text("hydra: {}\n")
-    code, err = _main(
+    code, err = cli_in_process(
         capsys, "trajectory.duration=0.2", "task.progress=false", f"hydra.run.dir={sweep}/extra"
     )
     assert code == 1 and f"hydra.run.dir={sweep}/extra lies inside the sweep directory {sweep}" in err
-    code, err = _main(capsys, "-m", *TINY, f"hydra.sweep.dir={sweep}/a/b")
+    code, err = cli_in_process(capsys, "-m", *TINY, f"hydra.sweep.dir={sweep}/a/b")
     assert code == 1 and "lies inside the sweep directory" in err
     assert sorted(p.name for p in sweep.iterdir()) == ["multirun.yaml"]
 

@@ -17,21 +17,11 @@ import pytest
 from omegaconf import OmegaConf
 
 from compliant_docking import REPO_ROOT
-from compliant_docking.cli import main
 from compliant_docking.sweep import directories
-from tests.helpers import SHORT_SWEEP
+from tests.helpers import SHORT_SWEEP, cli_in_process
 
 #: short single runs: 1 s of motion, 1 s of settling
 SHORT_RUN = ("trajectory.duration=1", "task.settle_time=1", "task.progress=false")
-
-
-def _main(capsys, *args: str) -> tuple[int, str]:
-    """``python -m compliant_docking args…`` in this process: (exit status, stderr)."""
-    try:
-        code = main(list(args))
-    except SystemExit as exc:
-        code = exc.code if isinstance(exc.code, int) else 1
-    return code, capsys.readouterr().err
 
 
 # --------------------------------------------------------------------------- refused up front
@@ -77,7 +67,7 @@ def test_a_bad_input_is_refused_before_a_run_directory_is_written(
     monkeypatch.chdir(tmp_path)  # the default run directory: runs/<date>/<time>_…
     monkeypatch.delenv("DISPLAY", raising=False)
     monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
-    code, err = _main(capsys, *args, *SHORT_RUN)
+    code, err = cli_in_process(capsys, *args, *SHORT_RUN)
     assert code == 1
     assert message in err
     assert err.startswith("compliant-docking: the configuration is refused; nothing was run or written.")
@@ -124,7 +114,7 @@ def test_what_only_the_robot_the_planner_or_the_files_tell_is_refused_up_front(
     directory does: the planner's own checks and its duration (the memory of the run),
     per-joint lists against the robot's joints, the files the run loads."""
     monkeypatch.chdir(tmp_path)
-    code, err = _main(capsys, *args, "task.progress=false")
+    code, err = cli_in_process(capsys, *args, "task.progress=false")
     assert code == 1
     assert message in err
     assert err.startswith("compliant-docking: the configuration is refused; nothing was run or written.")
@@ -153,7 +143,7 @@ def test_what_only_the_robot_the_planner_or_the_files_tell_is_refused_up_front(
 )
 def test_a_bad_sweep_is_refused_before_anything_is_created(tmp_path, monkeypatch, capsys, args, message):
     monkeypatch.chdir(tmp_path)
-    code, err = _main(capsys, "-m", *args, *SHORT_SWEEP)
+    code, err = cli_in_process(capsys, "-m", *args, *SHORT_SWEEP)
     assert code == 1
     assert message in err
     assert err.startswith("compliant-docking: the sweep is refused; nothing was run or written.")
@@ -175,7 +165,7 @@ def test_a_sweep_whose_planner_refuses_a_job_is_refused_up_front(
     tmp_path, monkeypatch, capsys, args, message
 ):
     monkeypatch.chdir(tmp_path)
-    code, err = _main(capsys, "-m", *args, "task.progress=false")
+    code, err = cli_in_process(capsys, "-m", *args, "task.progress=false")
     assert code == 1 and message in err and "[job 1: " in err
     assert err.startswith("compliant-docking: the sweep is refused; nothing was run or written.")
     assert not (tmp_path / "runs").exists()
@@ -186,7 +176,9 @@ def test_a_slurm_sweep_without_slurm_is_refused_before_anything_is_created(tmp_p
     and an empty "aborted" summary were written and the command exited 0."""
     monkeypatch.chdir(tmp_path)
     monkeypatch.setenv("PATH", str(tmp_path / "no_slurm_here"))  # no sbatch (nor srun) to find
-    code, err = _main(capsys, "-m", "controller.k=50,60", "hydra/launcher=submitit_slurm", *SHORT_SWEEP)
+    code, err = cli_in_process(
+        capsys, "-m", "controller.k=50,60", "hydra/launcher=submitit_slurm", *SHORT_SWEEP
+    )
     assert code == 1
     assert err.startswith("compliant-docking: the sweep is refused; nothing was run or written.")
     assert "hydra/launcher=submitit_slurm needs Slurm, and this machine has no sbatch on its PATH" in err
@@ -197,17 +189,23 @@ def test_an_unwritable_directory_is_refused_before_anything_runs(tmp_path, monke
     monkeypatch.chdir(tmp_path)
     blocker = tmp_path / "a_file"
     blocker.write_text("")
-    code, err = _main(capsys, "-m", "controller.k=40,50", f"hydra.sweep.dir={blocker}/sweep", *SHORT_SWEEP)
+    code, err = cli_in_process(
+        capsys, "-m", "controller.k=40,50", f"hydra.sweep.dir={blocker}/sweep", *SHORT_SWEEP
+    )
     assert code == 1 and f"hydra.sweep.dir={blocker}/sweep: {blocker} is not a directory" in err
     assert "resume" not in err
-    code, err = _main(capsys, "-m", "controller.k=40,50", "hydra.sweep.dir=/proc/sweep", *SHORT_SWEEP)
+    code, err = cli_in_process(
+        capsys, "-m", "controller.k=40,50", "hydra.sweep.dir=/proc/sweep", *SHORT_SWEEP
+    )
     assert code == 1 and "hydra.sweep.dir=/proc/sweep: cannot write in /proc" in err
-    code, err = _main(capsys, "hydra.run.dir=/proc/run", *SHORT_RUN)
+    code, err = cli_in_process(capsys, "hydra.run.dir=/proc/run", *SHORT_RUN)
     assert code == 1 and "hydra.run.dir=/proc/run: cannot write in /proc" in err
     if os.geteuid() != 0:  # permission bits bind everyone but root
         locked = tmp_path / "locked"
         locked.mkdir(mode=0o555)
-        code, err = _main(capsys, "-m", "controller.k=40,50", f"hydra.sweep.dir={locked}/sweep", *SHORT_SWEEP)
+        code, err = cli_in_process(
+            capsys, "-m", "controller.k=40,50", f"hydra.sweep.dir={locked}/sweep", *SHORT_SWEEP
+        )
         assert code == 1 and "cannot write in" in err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a_file"] + (["locked"] if os.geteuid() else [])
 

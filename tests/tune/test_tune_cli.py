@@ -9,7 +9,7 @@ import optuna
 import pytest
 import yaml
 
-from tests.helpers import make_cfg, sweep_cli
+from tests.helpers import cli_in_process, make_cfg, sweep_cli
 
 #: short docking runs that dock: a 2 cm stroke in 1 s, then 1.5 s to settle
 SHORT_TUNE = (
@@ -76,20 +76,12 @@ def test_a_small_study_finishes_writes_the_best_gains_and_resumes(sweep_dir):
 
 
 # --------------------------------------------------------------------------- refused up front
-def _main(capsys, *args: str) -> tuple[int, str]:
-    from compliant_docking.cli import main
-
-    try:
-        code = main(list(args))
-    except SystemExit as exc:
-        code = exc.code if isinstance(exc.code, int) else 1
-    return code, capsys.readouterr().err
 
 
 def test_a_search_space_outside_a_settings_range_is_refused_before_anything(tmp_path, monkeypatch, capsys):
     """Before: every trial's jobs failed the run's check (96 failed jobs), and the study exited 0."""
     monkeypatch.chdir(tmp_path)
-    code, err = _main(capsys, "-m", *SHORT_TUNE, "controller.k=interval(-100,1000)")
+    code, err = cli_in_process(capsys, "-m", *SHORT_TUNE, "controller.k=interval(-100,1000)")
     assert code == 1
     assert err.startswith("compliant-docking: the sweep is refused; nothing was run or written.")
     assert "controller.k must be a finite number >= 0 N/m; got -100.0." in err
@@ -108,7 +100,7 @@ def test_a_corrupt_study_is_refused_clearly_and_left_as_it_is(tmp_path, monkeypa
     study_dir.mkdir(parents=True)
     (study_dir / "study.db").write_bytes(content)
     (study_dir / "multirun.yaml").write_text("hydra:\n  sweeper:\n    study_name: fr3_impedance\n")
-    code, err = _main(capsys, "-m", *SHORT_TUNE)
+    code, err = cli_in_process(capsys, "-m", *SHORT_TUNE)
     assert code == 1
     assert f"the study storage {study_dir / 'study.db'} cannot be read (" in err
     assert "move it away to start the study afresh" in err
@@ -122,7 +114,7 @@ def test_a_study_directory_holding_something_else_is_refused(tmp_path, monkeypat
     other = tmp_path / "runs" / "tune" / "fr3_impedance"
     other.mkdir(parents=True)
     (other / "notes.txt").write_text("mine")
-    code, err = _main(capsys, "-m", *SHORT_TUNE)
+    code, err = cli_in_process(capsys, "-m", *SHORT_TUNE)
     assert code == 1 and "hydra.sweep.dir=runs/tune/fr3_impedance holds something other than" in err
     assert sorted(p.name for p in other.parent.iterdir()) == ["fr3_impedance"]
 
