@@ -99,9 +99,8 @@ class PoolLauncher(Launcher):
     def _start_workers(self) -> None:
         executor = self._executor()
         with _signals_left_to_the_launcher():
-            for _ in range(
-                self.workers()
-            ):  # each worker imports the job's libraries while the sweeper checks
+            # each worker imports the job's libraries while the sweeper checks
+            for _ in range(self.workers()):
                 executor.submit(_import_job_libraries)
 
     def launch(self, job_overrides: Sequence[Sequence[str]], initial_job_idx: int) -> Sequence[JobReturn]:
