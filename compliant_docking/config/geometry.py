@@ -83,7 +83,8 @@ class PlugGeometry:
     chamfer_length:    axial length of the chamfer [m].
     mass:              plug mass [kg]; the inertia is that of a uniform solid of this
                        shape (see :func:`plug_inertia`).
-    tip_segments:      polygon sides of the convex tip mesh (vertices on the circle).
+    segments:          polygon sides of the plug's convex collision hull (vertices on
+                       the circle; see :mod:`compliant_docking.sim.geometry.plug`).
     """
 
     radius: float = positive(unit="m")
@@ -91,7 +92,7 @@ class PlugGeometry:
     chamfer_angle_deg: float = within(0.0, 80.0, low_open=True, high_open=True, unit="deg")
     chamfer_length: float = positive(unit="m")
     mass: float = positive(unit="kg")
-    tip_segments: int = integers(12, 128)
+    segments: int = integers(12, 128)
 
     def __post_init__(self) -> None:
         raise_first(object_problems(self, "PlugGeometry") or plug_problems(self, "PlugGeometry"))
@@ -117,8 +118,8 @@ class SocketGeometry:
     funnel_angle_deg:  funnel half-angle from the socket axis [deg].
     funnel_depth:      axial length of the funnel [m].
     sectors:           number of pieces around the circumference (bore and funnel).
-    wall_thickness:    thickness of the bore and funnel boxes behind their faces [m].
-    floor_thickness:   thickness of the box closing the bottom of the bore [m].
+    wall_thickness:    thickness of the socket block beyond the funnel's mouth [m].
+    floor_thickness:   thickness of the slab closing the bottom of the bore [m].
     """
 
     plug_radius: float = positive(unit="m")

@@ -84,8 +84,8 @@ class KeyedSocketGeometry:
     insertion_depth:   depth of the prismatic bore [m].
     funnel_angle_deg:  angle of the funnel faces from the socket axis [deg].
     funnel_depth:      axial length of the funnel [m].
-    wall_thickness:    thickness of the bore and funnel boxes behind their faces [m].
-    floor_thickness:   thickness of the box closing the bottom of the bore [m].
+    wall_thickness:    thickness of the socket block beyond the funnel's mouth [m].
+    floor_thickness:   thickness of the slab closing the bottom of the bore [m].
     """
 
     sides: int = _sides()

@@ -184,6 +184,10 @@ def composition_problem(exc: BaseException) -> str:
         return unknown_key(key, [f.name for f in dataclasses.fields(schema)])
     if key:
         return f"{key}: {_first_line(cause).rstrip('.')}."
+    if "Could not find 'schema/launcher/submitit_" in str(exc):  # registered only with the plugin
+        from compliant_docking.extras import hint
+
+        return hint("cluster", "Hydra's submitit launcher (hydra-submitit-launcher, submitit)")
     return one_paragraph(exc)
 
 
@@ -220,8 +224,11 @@ def _choice(cfg: DictConfig, group: str) -> str | None:
 
 
 def _group_names() -> set[str]:
-    """The config groups (folders under conf/): their nodes are not schema settings."""
-    return {p.name for p in CONF_DIR.iterdir() if p.is_dir()} if CONF_DIR.is_dir() else set()
+    """The config groups (folders under conf/, not ``__pycache__``): their nodes are not
+    schema settings."""
+    if not CONF_DIR.is_dir():
+        return set()
+    return {p.name for p in CONF_DIR.iterdir() if p.is_dir() and not p.name.startswith(("_", "."))}
 
 
 def _first_line(exc: BaseException) -> str:
@@ -290,14 +297,15 @@ def _relations(cfg: DictConfig) -> list[str]:
 def _files(cfg: DictConfig, has_target: bool) -> list[str]:
     """The MJCF files the run loads (the robot's, a fragment given as ``tool.mjcf`` or
     ``target.mjcf``) exist: a missing file is refused before anything runs."""
-    from compliant_docking import resolve_path
+    from compliant_docking import looked_in, resolve_path
 
     found = []
     for kind in ("robot", "tool", "target") if has_target else ("robot", "tool"):
         given = _get(cfg, f"{kind}.mjcf")
         if isinstance(given, str) and given and not resolve_path(given).is_file():
             found.append(
-                f"{kind}.mjcf must name an MJCF file; there is no file {resolve_path(given)} (got {given!r})."
+                f"{kind}.mjcf must name an MJCF file; there is no such file (looked for {looked_in(given)}; "
+                f"got {given!r})."
             )
     return found
 

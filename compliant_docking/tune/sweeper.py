@@ -131,10 +131,12 @@ class TuningSweeper(Sweeper):
     def _definition(self, arguments: list[str]) -> dict:
         """The study's set-up from the config and the command's overrides: objective, search
         space, draws, budget (ValueError naming what cannot be used). Writes nothing."""
+        from compliant_docking.extras import MissingExtra, require
+
         try:
-            import optuna  # noqa: F401
-        except ImportError:
-            raise ValueError("hydra/sweeper=optuna needs Optuna: pip install -e '.[tune]'") from None
+            require("tune", "optuna")
+        except MissingExtra as exc:
+            raise ValueError(str(exc)) from None
         if self.n_trials < 1 or self.parallel_trials < 1:
             raise ValueError(
                 f"hydra.sweeper.n_trials ({self.n_trials}) and hydra.sweeper.parallel_trials "

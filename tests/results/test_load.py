@@ -200,7 +200,9 @@ def test_comparison_pools_repeats_and_counts_outcomes(tmp_path):
     assert configuration_keys(df) == ["controller"]  # the seed repeats a configuration
     table = comparison_table(df)
     assert list(table.columns) == ["impedance", "hqp"]
-    assert table.loc[("contact safety", "peak axial force [N]"), "impedance"] == pytest.approx(140.0 / 3)
+    assert table.loc[
+        ("contact safety", "peak axial force (raw, per step) [N]"), "impedance"
+    ] == pytest.approx(140.0 / 3)
     assert table.loc[("tracking accuracy", "position RMS [mm]"), "impedance"] == pytest.approx(1.0)
     assert (
         table.loc[("success", "jobs"), "impedance"] == 4
@@ -209,7 +211,9 @@ def test_comparison_pools_repeats_and_counts_outcomes(tmp_path):
     assert table.loc[("success", "success rate"), "impedance"] == pytest.approx(0.75)
     assert table.loc[("success", "failed"), "hqp"] == 1
     assert table.loc[("success", "success rate"), "hqp"] == 0.0
-    assert np.isnan(table.loc[("contact safety", "peak axial force [N]"), "hqp"])  # no value: n/a
+    assert np.isnan(
+        table.loc[("contact safety", "peak axial force (raw, per step) [N]"), "hqp"]
+    )  # no value: n/a
     text = comparison_markdown(table)
     assert "**contact safety**" in text and "75 %" in text and "n/a" in text
     assert counts(df).line() == "5 jobs: 3 finished (3 docked, 0 not docked), 2 failed"
@@ -325,17 +329,19 @@ def test_sweeps_named_otherwise_are_dated_by_their_multirun_yaml(tmp_path):
     assert newest_sweep(tmp_path) == later
 
 
-def test_locate_runs_reads_relative_paths_from_the_repository_root(tmp_path, monkeypatch):
-    from compliant_docking import REPO_ROOT
+def test_locate_runs_reads_relative_paths_from_the_working_directory_then_the_base(tmp_path, monkeypatch):
     from compliant_docking.results import locate_runs
+    from tests.helpers import REPO_ROOT
 
     monkeypatch.chdir(tmp_path)  # like a notebook running in analysis/
-    assert locate_runs("conf") == (REPO_ROOT / "conf").resolve()
-    (tmp_path / "only-here").mkdir()
-    assert locate_runs("only-here") == (tmp_path / "only-here").resolve()  # the working directory next
+    assert locate_runs("conf", base=REPO_ROOT) == (REPO_ROOT / "conf").resolve()
+    (tmp_path / "conf").mkdir()
+    assert locate_runs("conf", base=REPO_ROOT) == (tmp_path / "conf").resolve()  # the working directory first
     assert locate_runs(tmp_path) == tmp_path.resolve()
     with pytest.raises(FileNotFoundError, match="no directory 'runs/multirun/nope'"):
-        locate_runs("runs/multirun/nope")
+        locate_runs("runs/multirun/nope", base=REPO_ROOT)
+    with pytest.raises(FileNotFoundError, match="no directory 'assets'"):
+        locate_runs("assets")  # without a base: the working directory only
 
 
 def test_a_failed_or_interrupted_job_never_counts_as_docked(tmp_path, capsys):

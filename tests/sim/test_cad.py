@@ -11,7 +11,6 @@ import mujoco
 import numpy as np
 import pytest
 
-from compliant_docking import REPO_ROOT
 from compliant_docking.config.store import default_keyed
 from compliant_docking.interface import QUICK as QUICK_SEARCH
 from compliant_docking.interface import export_keyed, main
@@ -20,10 +19,10 @@ from compliant_docking.sim.geometry import cad
 from compliant_docking.sim.geometry.clearance import check_clearance, yaw_play_deg
 from compliant_docking.sim.geometry.convex import CoacdSettings, Hull, is_convex, mesh_volume
 from compliant_docking.sim.geometry.fragment import Key, read_key
-from compliant_docking.sim.geometry.keyed import keyed_plug_inertia, keyed_socket_boxes
+from compliant_docking.sim.geometry.keyed import keyed_plug_inertia, keyed_socket_pieces
 from compliant_docking.sim.geometry.mesh import keyed_cad_pair
 from compliant_docking.sim.scene import build_scene
-from tests.helpers import make_cfg
+from tests.helpers import REPO_ROOT, make_cfg
 
 pytest.importorskip("coacd", reason="the CAD converter needs the 'cad' extra (pip install -e '.[cad]')")
 pytest.importorskip("trimesh", reason="the CAD converter needs the 'cad' extra (pip install -e '.[cad]')")
@@ -34,22 +33,14 @@ QUICK = CoacdSettings(threshold=0.05, **QUICK_SEARCH)
 PLUG, SOCKET, _ = default_keyed()
 
 
-def _box_hull(box) -> Hull:
-    """A socket box of the generator as a convex piece (its 8 corners)."""
-    rot = np.zeros(9)
-    mujoco.mju_quat2Mat(rot, np.asarray(box.quat, float))
-    corners = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]) * box.half_size
-    return Hull.of(corners @ rot.reshape(3, 3).T + box.pos)
-
-
 @pytest.fixture(scope="module")
 def pair():
     """The keyed pair as the CAD meshes (metres, mated, seat at z = floor thickness) and
-    exact convex pieces: the plug's hull, the generator's socket boxes moved to the seat."""
+    exact convex pieces: the plug's hull, the generator's socket pieces moved to the seat."""
     plug, socket = keyed_cad_pair(PLUG, SOCKET)
     seat = np.array([0.0, 0.0, SOCKET.floor_thickness])
-    boxes = [Hull.of(_box_hull(b).vertices + seat) for b in keyed_socket_boxes(SOCKET)]
-    return plug, socket, [Hull.of(plug[0])], boxes
+    pieces = [Hull.of(np.array(p.vertices) + seat) for p in keyed_socket_pieces(SOCKET)]
+    return plug, socket, [Hull.of(plug[0])], pieces
 
 
 # ---------------------------------------------------------------------- the CAD pair
@@ -70,16 +61,16 @@ def _frustum() -> float:
 
 # ------------------------------------------------------------------- clearance check
 def test_exact_pieces_keep_the_clearance_and_the_yaw_play(pair):
-    """The generator's boxes are exact: the nominal 0.4 mm is measured (rays along the
+    """The generator's pieces are exact: the nominal 0.4 mm is measured (rays along the
     plug's face normals), every gap is kept, and the yaw play is the formula's."""
-    plug, socket, plug_hulls, boxes = pair
-    report = check_clearance(plug, plug_hulls, socket, boxes, samples=5000)
+    plug, socket, plug_hulls, pieces = pair
+    report = check_clearance(plug, plug_hulls, socket, pieces, samples=5000)
     assert report.passed, report.summary()
     assert report.nominal_m == pytest.approx(SOCKET.clearance, abs=1e-7)
     assert report.pieces_m == pytest.approx(SOCKET.clearance, abs=1e-7)
     assert report.plug.inside_fraction == 0.0
     # sampled points (4000) find the first contact within a few thousandths of a degree
-    assert yaw_play_deg(plug, boxes, 4) == pytest.approx(SOCKET.yaw_play_deg, abs=0.02)
+    assert yaw_play_deg(plug, pieces, 4) == pytest.approx(SOCKET.yaw_play_deg, abs=0.02)
 
 
 def test_one_hull_socket_fills_the_bore_and_fails(pair):
@@ -95,9 +86,9 @@ def test_one_hull_socket_fills_the_bore_and_fails(pair):
 def test_a_piece_narrowing_one_face_by_a_third_fails_at_keep_075(pair):
     """Only the gap counts, not intrusion: bore box 0 moved 0.14 mm towards the plug
     leaves 0.26 mm (65 %) there: fails at keep 0.75, passes at 0.5."""
-    plug, socket, plug_hulls, boxes = pair
-    moved = list(boxes)
-    moved[0] = Hull.of(boxes[0].vertices - [0.00014, 0.0, 0.0])
+    plug, socket, plug_hulls, pieces = pair
+    moved = list(pieces)
+    moved[0] = Hull.of(pieces[0].vertices - [0.00014, 0.0, 0.0])
     strict = check_clearance(plug, plug_hulls, socket, moved, keep=0.75, samples=5000)
     assert not strict.passed and strict.pieces_m == pytest.approx(0.00026, abs=1e-7)
     assert check_clearance(plug, plug_hulls, socket, moved, keep=0.5, samples=5000).passed
@@ -181,7 +172,7 @@ def test_refinement_halves_the_threshold_of_the_part_that_lost_clearance(
 ):
     """A socket decomposition that fills the bore at 0.05 and is exact below: the converter
     refines the socket only (0.05 → 0.025) and then writes."""
-    _, socket_mesh, _, boxes = pair
+    _, socket_mesh, _, pieces = pair
     plug_stl, socket_stl, *_ = converted
     calls = []
 
@@ -189,7 +180,7 @@ def test_refinement_halves_the_threshold_of_the_part_that_lost_clearance(
         calls.append(settings.threshold)
         if is_convex(vertices, faces):
             return [Hull.of(vertices)]
-        return [Hull.of(vertices)] if settings.threshold >= 0.05 else boxes
+        return [Hull.of(vertices)] if settings.threshold >= 0.05 else pieces
 
     monkeypatch.setattr(cad, "decompose", fake)
     result = cad.convert(plug_stl, socket_stl, tmp_path, cad.ConvertOptions(symmetry=4), log=lambda _: None)

@@ -64,11 +64,12 @@ def _free_inradius(socket: KeyedSocketGeometry, z: float, rays: int = 720) -> tu
 @pytest.mark.parametrize("sides", [3, 4, 6])
 def test_free_space_is_exactly_the_nominal_polygon(sides):
     """Faces at exactly the nominal inradius (bore and funnel), corners at inradius /
-    cos(π/n): the boxes reproduce the polygon, nothing intrudes, no gap."""
+    cos(π/n): the wall pieces reproduce the polygon, nothing intrudes, no gap. (MuJoCo
+    stores mesh vertices in single precision: nanometres at this size.)"""
     _, socket = _pair(sides)
     for z in (0.002, 0.015, 0.029, socket.insertion_depth + 1e-5, 0.038, 0.0445):
         lowest, highest = _free_inradius(socket, z)
-        assert lowest == pytest.approx(socket.free_inradius(z), abs=1e-9)
+        assert lowest == pytest.approx(socket.free_inradius(z), abs=1e-8)
         assert highest == pytest.approx(socket.free_inradius(z) / math.cos(math.pi / sides), abs=1e-8)
     assert socket.free_inradius(0.0) == pytest.approx(socket.plug_inradius + socket.clearance)
 
@@ -82,8 +83,8 @@ def _plug_in_socket(sides: int):
     frame.attach_body(build_keyed_plug(plug, CONTACT).body("dock"), prefix="plug_")
     model = spec.compile()
     data = mujoco.MjData(model)
-    shaft = model.geom("plug_plug_shaft").id
-    bores = [model.geom(f"bore_{k}").id for k in range(sides)]
+    shaft = model.geom("plug_plug_hull").id
+    bores = [model.geom(f"wall_{k}").id for k in range(sides)]
 
     def distance(offset=(0.0, 0.0), yaw_deg=0.0, lift=0.002) -> float:
         data.mocap_pos[0] = [offset[0], offset[1], lift]
@@ -97,8 +98,8 @@ def _plug_in_socket(sides: int):
 
 @pytest.mark.parametrize("sides", [3, 4, 6])
 def test_plug_moves_by_the_clearance_and_turns_by_the_yaw_play(sides):
-    """Pushed towards any face by just under the clearance, the mated plug's prism touches
-    no bore box; 20 µm past it, it penetrates. Turned just under the socket's yaw_play_deg
+    """Pushed towards any face by just under the clearance, the mated plug touches no wall
+    piece; 20 µm past it, it penetrates. Turned just under the socket's yaw_play_deg
     it fits; 0.05° past it (7-10 µm at its edges) it penetrates."""
     plug, socket, distance = _plug_in_socket(sides)
     c = socket.clearance
@@ -211,7 +212,7 @@ def test_gate_key_yaw_tolerance_defaults_to_the_play():
     gate.key_yaw_tolerance_deg = 1.0
     assert key_yaw_limit(gate, Key(4, 2.34)) == 1.0
     seated = SeatState(1e-5, 1e-4, 0.1, 3.0, key_yaw_deg=2.0)
-    metrics = {"peak_axial_force_N": 5.0}
+    metrics = {"peak_axial_force_N": 5.0, "filtered_peak_axial_force_N": 5.0}
     assert docking_gate(seated, metrics, gate) == []  # no key limit: not checked
     (failure,) = docking_gate(seated, metrics, gate, 1.0)
     assert failure.startswith("key yaw 2 deg > 1 deg") and "not lined up" in failure

@@ -14,8 +14,7 @@ from pathlib import Path
 import pytest
 from omegaconf import OmegaConf
 
-from compliant_docking import REPO_ROOT
-from tests.helpers import cli_in_process
+from tests.helpers import REPO_ROOT, cli_in_process
 
 #: a two-job sweep in free space, 0.2 s simulated per job, jobs run in the launching process
 TINY = (

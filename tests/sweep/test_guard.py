@@ -16,9 +16,8 @@ import psutil
 import pytest
 from omegaconf import OmegaConf
 
-from compliant_docking import REPO_ROOT
 from compliant_docking.sweep import directories
-from tests.helpers import SHORT_SWEEP, cli_in_process
+from tests.helpers import REPO_ROOT, SHORT_SWEEP, cli_in_process
 
 #: short single runs: 1 s of motion, 1 s of settling
 SHORT_RUN = ("trajectory.duration=1", "task.settle_time=1", "task.progress=false")
@@ -93,10 +92,10 @@ def test_a_bad_input_is_refused_before_a_run_directory_is_written(
             ("target=none", "trajectory=twophase", "task.init_pos=[0.55,0,0.35]"),
             "trajectory=twophase needs a goal (a target)",
         ),
-        (("tool.mjcf=no/such/tool.xml",), "tool.mjcf must name an MJCF file; there is no file "),
+        (("tool.mjcf=no/such/tool.xml",), "tool.mjcf must name an MJCF file; there is no such file "),
         (("tool.mjcf=assets/iiwa14/iiwa14.xml",), "iiwa14.xml: no body named 'dock'. A tool fragment must"),
-        (("target.mjcf=no/such/target.xml",), "target.mjcf must name an MJCF file; there is no file "),
-        (("robot.mjcf=no/such/robot.xml",), "robot.mjcf must name an MJCF file; there is no file "),
+        (("target.mjcf=no/such/target.xml",), "target.mjcf must name an MJCF file; there is no such file "),
+        (("robot.mjcf=no/such/robot.xml",), "robot.mjcf must name an MJCF file; there is no such file "),
         (
             ("robot.ee_site=flange",),
             "robot.ee_site must be a site of robot.mjcf (attachment_site); got 'flange'.",

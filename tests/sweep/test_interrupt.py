@@ -17,7 +17,7 @@ from pathlib import Path
 import psutil
 import pytest
 
-from compliant_docking import REPO_ROOT
+from tests.helpers import REPO_ROOT
 
 #: four short docking jobs on two workers (about half a second of simulation each)
 JOBS = (

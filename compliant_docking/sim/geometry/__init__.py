@@ -1,5 +1,5 @@
 """The docking interfaces as MuJoCo fragments: the round pair, plug (:mod:`.plug`) and
-socket (:mod:`.socket`); the keyed pair (:mod:`.keyed`); the collision filtering they share
+socket (:mod:`.socket`); the keyed pair (:mod:`.keyed`); the collision bits they share
 (:mod:`.collision`) and what a fragment declares about its key (:mod:`.fragment`). A
 user's interface from CAD (:mod:`.cad`, ``python -m compliant_docking.interface``): mesh
 files (:mod:`.mesh`) → convex pieces (:mod:`.convex`, CoACD) → a clearance check
@@ -16,6 +16,6 @@ from compliant_docking.sim.geometry.plug import (
     plug_hull_vertices,
     plug_inertia,
 )
-from compliant_docking.sim.geometry.socket import Box, build_socket, socket_boxes
+from compliant_docking.sim.geometry.socket import Piece, build_socket, socket_pieces
 
-__all__ = ["Box", "build_plug", "build_socket", "plug_hull_vertices", "plug_inertia", "socket_boxes"]
+__all__ = ["Piece", "build_plug", "build_socket", "plug_hull_vertices", "plug_inertia", "socket_pieces"]

@@ -49,13 +49,12 @@ from compliant_docking.sim.geometry.clearance import (
     yaw_play_deg,
 )
 from compliant_docking.sim.geometry.collision import (
-    ALL_SOCKET_BITS,
     PLUG_COLLISION_GROUP,
     PLUG_RGBA,
-    SOCKET_PRIORITY,
     SOCKET_RGBA,
     VISUAL_GROUP,
-    apply_contact,
+    make_plug_collider,
+    make_socket_collider,
 )
 from compliant_docking.sim.geometry.convex import (
     CoacdSettings,
@@ -366,11 +365,11 @@ def tool_fragment(
             group=PLUG_COLLISION_GROUP,
             rgba=list(PLUG_RGBA),
         )
-        apply_contact(g, options.contact, 0, ALL_SOCKET_BITS)
+        make_plug_collider(g, options.contact)
     visual = _add_visual(spec, body, "plug_visual", to_dock(plug[0]), plug[1], VISUAL_GROUP, PLUG_RGBA)
     if options.collision == "sdf":
         visual.type = mujoco.mjtGeom.mjGEOM_SDF
-        apply_contact(visual, options.contact, 0, ALL_SOCKET_BITS)
+        make_plug_collider(visual, options.contact)
     body.add_site(name="sensor_site", pos=[0.0, 0.0, 0.0], quat=[1.0, 0.0, 0.0, 0.0])
     body.add_site(name="tcp", pos=[0.0, 0.0, z_top - z_tip])
     declare_key(spec, key)
@@ -399,13 +398,11 @@ def target_fragment(
             group=PLUG_COLLISION_GROUP,
             rgba=list(SOCKET_RGBA),
         )
-        apply_contact(g, options.contact, ALL_SOCKET_BITS, 0)
-        g.priority = SOCKET_PRIORITY
+        make_socket_collider(g, options.contact)
     visual = _add_visual(spec, body, "socket_visual", socket[0] - seat, socket[1], 0, SOCKET_RGBA)
     if options.collision == "sdf":
         visual.type = mujoco.mjtGeom.mjGEOM_SDF
-        apply_contact(visual, options.contact, ALL_SOCKET_BITS, 0)
-        visual.priority = SOCKET_PRIORITY
+        make_socket_collider(visual, options.contact)
     body.add_site(name="seat", pos=[0.0, 0.0, 0.0])
     body.add_site(name="mouth", pos=[0.0, 0.0, float(socket[0][:, 2].max()) - z_tip])
     declare_key(spec, key)

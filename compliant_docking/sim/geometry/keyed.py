@@ -4,17 +4,16 @@ polygonal socket with a pyramidal entry funnel, as MjSpec fragments.
 Plug frame (as the round plug, :mod:`.plug`): one root body ``dock``, origin at the centre
 of the mounting face, +z along the plug axis towards the tip; sites ``sensor_site`` at the
 origin and ``tcp`` at the tip centre (0, 0, length). Face k of the prism has its outward
-normal at azimuth 2πk/sides from +x. Collision: a convex-mesh prism from the mounting
-face to the chamfer edge, meeting only the bore boxes, and a convex-mesh frustum (the
-chamfer) meeting only the funnel boxes and the floor, as the round plug's shaft and tip.
+normal at azimuth 2πk/sides from +x. Collision: one convex mesh, the plug's convex hull
+(prism and pyramidal chamfer), meeting every socket piece, as the round plug's.
 
 Socket frame (as the round socket, :mod:`.socket`): root body ``dock`` at the seat, +z out
-of the socket; bore face k faces azimuth 2πk/sides. The bore is the intersection of the
-half-spaces behind ``sides`` boxes whose inner faces lie in the planes of the nominal bore
-(inradius = plug inradius + clearance), and the funnel likewise with tilted boxes whose
-inner faces lie in the planes of the nominal pyramid: the free space is exactly the
-nominal one, so the clearance between parallel faces is exactly ``clearance`` and every
-contact is a box against a convex mesh.
+of the socket; bore face k faces azimuth 2πk/sides. The block is built as the round
+socket's (:func:`~.socket.cavity_pieces`): wall piece k is the convex solid behind bore
+face k (the plane of the nominal bore, inradius = plug inradius + clearance) and behind
+funnel face k (the plane of the nominal pyramid), on a floor slab. The free space is
+exactly the nominal one, so the clearance between parallel faces is exactly
+``clearance``, and every contact is between two convex meshes.
 
 Mated (tcp = seat turned 180° about x): plug face k lies parallel to bore face −k at the
 clearance. Both fragments declare the key (:mod:`.fragment`): symmetry ``sides`` and the
@@ -30,16 +29,14 @@ import numpy as np
 
 from compliant_docking.config.geometry import ContactParams
 from compliant_docking.config.keyed import KeyedPlugGeometry, KeyedSocketGeometry
-from compliant_docking.sim.geometry.collision import (
-    PLUG_COLLISION_GROUP,
-    PLUG_RGBA,
-    SHAFT_CONAFFINITY,
-    TIP_CONAFFINITY,
-    apply_contact,
-)
 from compliant_docking.sim.geometry.fragment import Key, declare_key
-from compliant_docking.sim.geometry.plug import add_visual_and_sites, dock_body, stacked_inertia
-from compliant_docking.sim.geometry.socket import Box, box_socket_spec, cavity_boxes
+from compliant_docking.sim.geometry.plug import (
+    add_hull_collider,
+    add_visual_and_sites,
+    dock_body,
+    stacked_inertia,
+)
+from compliant_docking.sim.geometry.socket import Piece, cavity_pieces, piece_socket_spec
 
 
 def polygon_ring(inradius: float, z: float, sides: int) -> np.ndarray:
@@ -71,16 +68,17 @@ def keyed_plug_inertia(geom: KeyedPlugGeometry) -> tuple[float, np.ndarray, np.n
     return stacked_inertia(profile, *polygon_area_coeffs(geom.sides), geom.mass)
 
 
-def keyed_plug_vertices(geom: KeyedPlugGeometry, z_start: float = 0.0) -> np.ndarray:
-    """Vertices (plug frame) of the plug's convex hull from ``z_start`` to the tip."""
+def keyed_plug_vertices(geom: KeyedPlugGeometry) -> np.ndarray:
+    """Vertices (plug frame) of the plug's convex hull: the polygon at the mounting face,
+    at the chamfer edge and at the tip face."""
     n = geom.sides
-    rings = [
-        polygon_ring(geom.inradius, geom.chamfer_start, n),
-        polygon_ring(geom.tip_inradius, geom.length, n),
-    ]
-    if z_start < geom.chamfer_start:
-        rings.insert(0, polygon_ring(geom.inradius, z_start, n))
-    return np.vstack(rings)
+    return np.vstack(
+        [
+            polygon_ring(geom.inradius, 0.0, n),
+            polygon_ring(geom.inradius, geom.chamfer_start, n),
+            polygon_ring(geom.tip_inradius, geom.length, n),
+        ]
+    )
 
 
 def _plug_key(geom: KeyedPlugGeometry) -> Key:
@@ -90,41 +88,25 @@ def _plug_key(geom: KeyedPlugGeometry) -> Key:
 def build_keyed_plug(geom: KeyedPlugGeometry, contact: ContactParams | None) -> mujoco.MjSpec:
     """Keyed plug fragment: root body ``dock`` (mounting face, +z to the tip), sites
     ``sensor_site`` (origin) and ``tcp`` (0, 0, length), explicit inertial from
-    :func:`keyed_plug_inertia`, collision prism + chamfer frustum, a visual hull, and the
-    key (symmetry ``sides``). ``contact``: as for :func:`~.plug.build_plug` (None:
+    :func:`keyed_plug_inertia`, the convex hull as its collision geom ``plug_hull`` and as
+    its visual, and the key (symmetry ``sides``). ``contact``: as for :func:`~.plug.build_plug` (None:
     MuJoCo's defaults; against the socket its higher-priority values apply)."""
     spec = mujoco.MjSpec()
     spec.modelname = "keyed_plug"
     body = dock_body(spec, *keyed_plug_inertia(geom))
 
-    n, z_edge = geom.sides, geom.chamfer_start
-    parts = (
-        (
-            "plug_shaft",
-            np.vstack([polygon_ring(geom.inradius, 0.0, n), polygon_ring(geom.inradius, z_edge, n)]),
-        ),
-        ("plug_tip", keyed_plug_vertices(geom, z_edge)),
-    )
-    for (name, vertices), conaffinity in zip(parts, (SHAFT_CONAFFINITY, TIP_CONAFFINITY)):
-        spec.add_mesh(name=name, uservert=vertices.ravel().tolist())
-        g = body.add_geom(
-            name=name,
-            type=mujoco.mjtGeom.mjGEOM_MESH,
-            meshname=name,
-            group=PLUG_COLLISION_GROUP,
-            rgba=list(PLUG_RGBA),
-        )
-        apply_contact(g, contact, 0, conaffinity)
-    add_visual_and_sites(spec, body, keyed_plug_vertices(geom), geom.length)
+    hull = keyed_plug_vertices(geom)
+    add_hull_collider(spec, body, "plug_hull", hull, contact)
+    add_visual_and_sites(spec, body, hull, geom.length)
     declare_key(spec, _plug_key(geom))
     return spec
 
 
-def keyed_socket_boxes(geom: KeyedSocketGeometry) -> list[Box]:
-    """The keyed socket's collision boxes (socket frame): ``bore_<k>``, ``funnel_<k>``
-    for k < sides and ``floor``; inner faces in the planes of the nominal bore and
-    pyramid (see :func:`~compliant_docking.sim.geometry.socket.cavity_boxes`)."""
-    return cavity_boxes(
+def keyed_socket_pieces(geom: KeyedSocketGeometry) -> list[Piece]:
+    """The keyed socket's convex pieces (socket frame): ``wall_<k>`` for k < sides and
+    ``floor``; inner faces in the planes of the nominal bore and pyramid (see
+    :func:`~compliant_docking.sim.geometry.socket.cavity_pieces`)."""
+    return cavity_pieces(
         geom.sides,
         geom.bore_inradius,
         geom.insertion_depth,
@@ -136,10 +118,10 @@ def keyed_socket_boxes(geom: KeyedSocketGeometry) -> list[Box]:
 
 
 def build_keyed_socket(geom: KeyedSocketGeometry, contact: ContactParams) -> mujoco.MjSpec:
-    """Keyed socket fragment: static root body ``dock`` at the seat (+z out), the boxes of
-    :func:`keyed_socket_boxes`, sites ``seat`` and ``mouth``, and the key (symmetry
+    """Keyed socket fragment: static root body ``dock`` at the seat (+z out), the pieces of
+    :func:`keyed_socket_pieces`, sites ``seat`` and ``mouth``, and the key (symmetry
     ``sides``, yaw play :attr:`KeyedSocketGeometry.yaw_play_deg`)."""
-    spec = box_socket_spec(keyed_socket_boxes(geom), contact, geom.mouth_height)
+    spec = piece_socket_spec(keyed_socket_pieces(geom), contact, geom.mouth_height)
     spec.modelname = "keyed_socket"
     declare_key(spec, Key(geom.sides, geom.yaw_play_deg))
     return spec

@@ -7,20 +7,17 @@ with identity orientation (the force/torque sensor anchor) and ``tcp`` at the ti
 ``(0, 0, length)``.  The body carries an explicit inertial equal to :func:`plug_inertia`;
 every geom has zero density and adds no mass.
 
-Collision models (``collision=``):
-``"cylinder_tip"`` (default): a cylinder primitive for the shaft, from the mounting face
-to where the chamfer starts, plus a convex-mesh frustum for the chamfer (``tip_segments``
-vertices per ring, on the circle).  The cylinder is exactly round, so the bore clearance
-is exact, and its lower edge is the chamfer edge.  Pairs are filtered so that the shaft
-only meets the bore boxes and the chamfer only meets the funnel boxes and the floor: with
-the plug tilted less than the funnel angle and the chamfer angle relative to the socket
-axis (always the case while docking), the excluded pairs cannot touch before an included
-one does, and skipping them halves the collision cost in the bore (see
-``benchmarks/contact_geometry.py``).
-``"capsule_tip"``: capsule shaft ending one radius above the chamfer plus a convex-mesh
-tip (short cylinder + chamfer) meeting everything; the capsule's end cap, inside the tip,
-makes slightly tilted contact normals at the bore's top edge.
-``"mesh"``: one convex mesh of the whole plug meeting everything (slowest).
+Collision model: ONE convex mesh, the plug's convex hull (rings of ``segments``
+vertices on the circle at the mounting face, the chamfer edge and the tip face), which
+meets every socket piece.  The chamfer edge is a convex edge of the solid plug, so it
+lies inside one piece and no buried face can be touched.  The polygon's faces lie up to
+``radius * (1 - cos(pi / segments))`` inside the circle (21 µm at 48 segments), so the
+clearance is never below nominal, and its face normals turn at most 180°/segments from
+the round plug's (3.75° at 48).  Two earlier models were dropped after a contact audit
+(docs/contact.md): a cylinder primitive for the shaft (MuJoCo's cylinder–convex contacts
+came back with normals reversed inside the bore) with a pair filter that hid the funnel
+from the shaft (which then rested on buried faces), and a capsule shaft (its end cap
+tilted the normals at the bore's mouth).
 """
 
 from __future__ import annotations
@@ -30,17 +27,13 @@ import math
 import mujoco
 import numpy as np
 
-from compliant_docking.config.geometry import ContactParams, PlugGeometry, require
+from compliant_docking.config.geometry import ContactParams, PlugGeometry
 from compliant_docking.sim.geometry.collision import (
-    ALL_SOCKET_BITS,
     PLUG_COLLISION_GROUP,
-    PLUG_COLLISION_MODELS,
     PLUG_RGBA,
-    SHAFT_CONAFFINITY,
-    TIP_CONAFFINITY,
     VISUAL_GROUP,
     VISUAL_SEGMENTS,
-    apply_contact,
+    make_plug_collider,
 )
 
 
@@ -100,94 +93,52 @@ def _ring(radius: float, z: float, segments: int) -> np.ndarray:
     return np.column_stack([radius * np.cos(angle), radius * np.sin(angle), np.full(segments, z)])
 
 
-def plug_hull_vertices(geom: PlugGeometry, z_start: float = 0.0, segments: int | None = None) -> np.ndarray:
-    """(n, 3) vertices, plug frame, of the plug's convex hull from ``z_start`` to the tip.
-
-    Rings of ``segments`` (default ``geom.tip_segments``) vertices on the circle at
-    z_start (if below the chamfer edge), at the chamfer edge and at the tip face.
-    """
-    n = geom.tip_segments if segments is None else segments
-    rings = [_ring(geom.radius, geom.chamfer_start, n), _ring(geom.tip_radius, geom.length, n)]
-    if z_start < geom.chamfer_start:
-        rings.insert(0, _ring(geom.radius, z_start, n))
-    return np.vstack(rings)
-
-
-def _capsule_end(geom: PlugGeometry) -> float:
-    """Tip-side end of the capsule segment: its end cap reaches exactly the chamfer edge."""
-    return geom.chamfer_start - geom.radius
+def plug_hull_vertices(geom: PlugGeometry, segments: int | None = None) -> np.ndarray:
+    """(3 n, 3) vertices, plug frame, of the plug's convex hull: rings of n = ``segments``
+    (default ``geom.segments``) vertices on the circle at the mounting face, at the
+    chamfer edge and at the tip face."""
+    n = geom.segments if segments is None else segments
+    return np.vstack(
+        [
+            _ring(geom.radius, 0.0, n),
+            _ring(geom.radius, geom.chamfer_start, n),
+            _ring(geom.tip_radius, geom.length, n),
+        ]
+    )
 
 
-def _add_plug_collision(
-    spec: mujoco.MjSpec,
-    body: mujoco.MjsBody,
-    geom: PlugGeometry,
-    contact: ContactParams | None,
-    collision: str,
-) -> None:
-    """Add the collision geoms of the chosen model to ``body`` (plug frame)."""
-
-    def add(name: str, conaffinity: int, **kwargs) -> None:
-        g = body.add_geom(name=name, group=PLUG_COLLISION_GROUP, rgba=list(PLUG_RGBA), **kwargs)
-        apply_contact(g, contact, 0, conaffinity)
-
-    def add_hull(name: str, z_start: float, conaffinity: int) -> None:
-        spec.add_mesh(name=name, uservert=plug_hull_vertices(geom, z_start).ravel().tolist())
-        add(name, conaffinity, type=mujoco.mjtGeom.mjGEOM_MESH, meshname=name)
-
-    z_edge = geom.chamfer_start
-    if collision == "cylinder_tip":
-        add(
-            "plug_shaft",
-            SHAFT_CONAFFINITY,
-            type=mujoco.mjtGeom.mjGEOM_CYLINDER,
-            size=[geom.radius, 0.5 * z_edge, 0.0],
-            pos=[0.0, 0.0, 0.5 * z_edge],
-        )
-        add_hull("plug_tip", z_edge, TIP_CONAFFINITY)
-    elif collision == "capsule_tip":
-        z0, z1 = geom.radius, _capsule_end(geom)
-        add(
-            "plug_shaft",
-            SHAFT_CONAFFINITY,
-            type=mujoco.mjtGeom.mjGEOM_CAPSULE,
-            size=[geom.radius, 0.5 * (z1 - z0), 0.0],
-            pos=[0.0, 0.0, 0.5 * (z0 + z1)],
-        )
-        add_hull("plug_tip", z1, ALL_SOCKET_BITS)
-    else:
-        add_hull("plug_hull", 0.0, ALL_SOCKET_BITS)
-
-
-def build_plug(
-    geom: PlugGeometry, contact: ContactParams | None, *, collision: str = "cylinder_tip"
-) -> mujoco.MjSpec:
+def build_plug(geom: PlugGeometry, contact: ContactParams | None) -> mujoco.MjSpec:
     """Plug fragment: root body ``dock``, origin at the mounting face, +z towards the tip.
 
-    ``collision`` selects the collision model (see the module docstring):
-    ``"cylinder_tip"`` (default), ``"capsule_tip"`` or ``"mesh"``.  A visual-only mesh
-    of the whole plug is always added.  Sites ``sensor_site`` (origin, identity) and
+    One collision geom ``plug_hull`` (the convex hull, see the module docstring) and a
+    visual-only mesh of the whole plug.  Sites ``sensor_site`` (origin, identity) and
     ``tcp`` (0, 0, length).  Explicit inertial from :func:`plug_inertia`.  ``contact``
     only matters against geoms of equal priority: the socket's pieces have a higher
     priority, so against them the socket's values apply (None: MuJoCo's defaults).
     """
-    require(collision in PLUG_COLLISION_MODELS, "collision", f"one of {PLUG_COLLISION_MODELS}", collision)
-    if collision == "capsule_tip":
-        require(
-            _capsule_end(geom) > geom.radius,
-            "PlugGeometry.length",
-            f"greater than 2 * radius + chamfer_length = "
-            f"{2 * geom.radius + geom.chamfer_length:.6g} m for collision='capsule_tip'",
-            geom.length,
-        )
     spec = mujoco.MjSpec()
     spec.modelname = "plug"
     body = dock_body(spec, *plug_inertia(geom))
-
-    _add_plug_collision(spec, body, geom, contact, collision)
-    segments = max(VISUAL_SEGMENTS, geom.tip_segments)
-    add_visual_and_sites(spec, body, plug_hull_vertices(geom, 0.0, segments), geom.length)
+    add_hull_collider(spec, body, "plug_hull", plug_hull_vertices(geom), contact)
+    segments = max(VISUAL_SEGMENTS, geom.segments)
+    add_visual_and_sites(spec, body, plug_hull_vertices(geom, segments), geom.length)
     return spec
+
+
+def add_hull_collider(
+    spec: mujoco.MjSpec, body, name: str, vertices: np.ndarray, contact: ContactParams | None
+) -> None:
+    """A plug's collision geom: the convex hull of ``vertices`` (body frame), meeting every
+    socket piece."""
+    spec.add_mesh(name=name, uservert=np.ravel(vertices).tolist())
+    g = body.add_geom(
+        name=name,
+        type=mujoco.mjtGeom.mjGEOM_MESH,
+        meshname=name,
+        group=PLUG_COLLISION_GROUP,
+        rgba=list(PLUG_RGBA),
+    )
+    make_plug_collider(g, contact)
 
 
 def dock_body(spec: mujoco.MjSpec, mass: float, com: np.ndarray, inertia: np.ndarray):
