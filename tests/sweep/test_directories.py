@@ -59,7 +59,7 @@ def test_every_job_needs_a_directory_of_its_own_inside_the_sweep(subdirs, messag
 def test_distinct_job_directories_inside_the_sweep_pass():
     from compliant_docking.sweep.directories import job_dir_problems
 
-    assert job_dir_problems({0: "0_a", 1: "1_a", 2: "2_tool.mjcf=assets/x/tool.xml", 3: "x/../3_b"}) == []
+    assert job_dir_problems({0: "0_a", 1: "1_a", 2: "2_tool.mjcf=my_parts/tool.xml", 3: "x/../3_b"}) == []
 
 
 @pytest.mark.parametrize(
@@ -241,7 +241,7 @@ def test_a_job_name_too_long_for_a_file_name_is_shortened_with_a_hash():
     assert job_dir(3, "controller.k=50,robot=fr3") == "3_controller.k=50,robot=fr3"  # as Hydra named it
     assert (
         job_dir(0, "") == "0_"
-        and job_dir(2, "tool.mjcf=assets/x/tool.xml") == "2_tool.mjcf=assets/x/tool.xml"
+        and job_dir(2, "tool.mjcf=my_parts/tool.xml") == "2_tool.mjcf=my_parts/tool.xml"
     )
     long = "robot.max_torque=[" + ",".join(["10.000000000001"] * 7) + "]," + "x" * 300
     name = job_dir(12, long)
