@@ -300,6 +300,19 @@ def test_two_sweeps_started_together_each_get_their_own_directory(tmp_path):
 
 
 # --------------------------------------------------------------------------- orphans
+def _loky_workers(pid: int) -> list[psutil.Process]:
+    """The loky workers among the descendants of ``pid``; a process that ends while it is
+    looked at (a zombie, gone: e.g. a job's short-lived ``git``) is not one of them."""
+    found = []
+    for p in psutil.Process(pid).children(recursive=True):
+        try:
+            if "popen_loky_posix" in " ".join(p.cmdline()):
+                found.append(p)
+        except (psutil.ZombieProcess, psutil.NoSuchProcess, psutil.AccessDenied):
+            continue
+    return found
+
+
 def test_the_workers_of_a_killed_sweep_exit_within_a_minute(tmp_path):
     """SIGKILL of the launching process leaves its joblib workers without a parent: their
     watchdog ends them (measured: about 1 s) instead of loky's 300 s idle timeout or, as
@@ -326,11 +339,7 @@ def test_the_workers_of_a_killed_sweep_exit_within_a_minute(tmp_path):
     try:
         deadline = time.monotonic() + 120
         while time.monotonic() < deadline:  # both workers started and running a job
-            workers = [
-                p
-                for p in psutil.Process(proc.pid).children(recursive=True)
-                if "popen_loky_posix" in " ".join(p.cmdline())
-            ]
+            workers = _loky_workers(proc.pid)
             if len(workers) == 2 and len(list((tmp_path / "sweep").glob("*/.hydra"))) >= 2:
                 break
             time.sleep(0.2)
