@@ -3,14 +3,16 @@
 
 Exit status: 0 the run succeeded (docked / tracking gate PASS), 1 the run failed
 (error or divergence) or the command was refused before anything ran (a bad key or
-value: compliant_docking/sweep/guard.py), 3 the run finished but its gate did not pass,
-130 / 143 stopped by Ctrl-C / SIGTERM (a single run records status "interrupted" with
-its time series so far).
+value, a directory that is not new, a resume or tuning study that cannot continue:
+compliant_docking/sweep/guard.py), 3 the run finished but its gate did not pass,
+130 / 143 / 129 stopped by Ctrl-C / SIGTERM / SIGHUP (a single run records status
+"interrupted" with its time series so far: compliant_docking/run/interrupt.py).
 A sweep (``-m``): 1 if any job failed (or its worker died), else 0 — jobs that did not
-dock are results, counted in the summary (compliant_docking/sweep/summary.py); 2 a
-refused ``resume=`` (compliant_docking/sweep/resume.py); 130 / 143 stopped by Ctrl-C /
-SIGTERM (the summary of what finished is written). No traceback is printed for an
-interruption or a worker process that died; the summary says what happened.
+dock are results, counted in the summary (compliant_docking/sweep/summary.py); with
+``hydra.callbacks.sweep.strict=false`` (the tuning presets) 1 only when every job failed;
+130 / 143 / 129 stopped by a signal (the workers are stopped, the summary of what
+finished is written). No traceback is printed for an interruption or a worker process
+that died; the summary says what happened.
 
 ``--help`` lists the config groups and their options (Hydra's own help would also list
 the typed schemas, which are not choices).
@@ -35,8 +37,10 @@ from omegaconf import DictConfig, OmegaConf
 
 from compliant_docking import CONF_DIR
 from compliant_docking.config import compose_cache, register_schemas
+from compliant_docking.run import interrupt
 from compliant_docking.sweep import launchers, resume
-from compliant_docking.sweep.guard import Refused, refuse, release_empty
+from compliant_docking.sweep.directories import release_empty, sweep_dir_of
+from compliant_docking.sweep.guard import Refused, refuse
 from compliant_docking.sweep.session import SweepSession
 
 # Hydra composes each job's config in the launching process and again in the worker that
@@ -66,7 +70,7 @@ class CommandLine:
                 self.records.append(kept)
                 return resume.SKIPPED
             note = resume.rerun_note(why)  # the progress line says why it runs again
-            resume.prepare_rerun(cfg, out_dir)
+            resume.prepare_rerun(cfg, out_dir, sweep_dir_of(hydra_cfg))
         # in a sweep, each job prints one progress line (SweepCallback), not its summary,
         # and draws no figures unless `figures=true` (report --runs draws them later)
         sweep = hydra_cfg.mode == RunMode.MULTIRUN
@@ -84,24 +88,24 @@ class CommandLine:
             return resume.fail(exc)
         register_schemas()
         launchers.register_schemas(ConfigStore.instance())  # hydra/launcher=submitit_*
-        multirun = any(arg in ("-m", "--multirun") for arg in argv)
-        # SIGTERM: a sweep unwinds like Ctrl-C and summarises what finished; a single run
-        # records itself as interrupted (run/runner.py)
-        previous = signal.signal(signal.SIGTERM, _terminated if multirun else _terminate_run)
+        # Ctrl-C, SIGTERM, SIGHUP: a run records itself as interrupted (run/runner.py); a
+        # sweep stops its workers and summarises what finished (run/interrupt.py)
         app = hydra.main(version_base="1.3", config_path=str(CONF_DIR), config_name="config")(self.task)
         saved, sys.argv[1:] = sys.argv[1:], argv  # Hydra parses sys.argv
-        with SweepSession.open() as session, _restored(signal.SIGTERM, previous):
+        interrupt.forget()
+        with SweepSession.open() as session, _handled(interrupt.SIGNALS, interrupt.raise_stop):
             try:
                 with _errors_reported():
                     app()
             except Refused:  # nothing was created: nothing to summarise, no resume to suggest
                 raise
             except (SystemExit, KeyboardInterrupt) as exc:
-                session.finish_aborted()  # a sweep cut short (worker crash, Ctrl-C): summarise it
+                session.finish_aborted()  # a sweep cut short (worker crash, a signal): summarise it
                 if isinstance(exc, KeyboardInterrupt):  # no traceback: the record says what happened
-                    return 128 + getattr(exc, "signum", signal.SIGINT)
+                    return interrupt.exit_status(exc)
                 raise
             finally:
+                interrupt.release(stop=False)  # never leave the signals held (a refused run)
                 sys.argv[1:] = saved
                 release_empty()  # a directory claimed for a command that then wrote nothing
             if session.outcome is not None:  # the jobs ran in worker processes
@@ -128,37 +132,28 @@ def main(argv: list[str] | None = None) -> int:
     return status
 
 
-def _terminated(signum, frame) -> None:
-    """SIGTERM in a sweep (``kill``, Slurm's ``scancel`` of the launching job): unwind
-    like Ctrl-C, so the joblib workers are stopped and the summary is written."""
-    raise SystemExit(128 + signum)
-
-
-def _terminate_run(signum, frame) -> None:
-    """SIGTERM during a single run: the runner records the run as interrupted (with its
-    time series so far), then the command exits 143."""
-    from compliant_docking.run.runner import Terminated
-
-    raise Terminated()
-
-
 @contextlib.contextmanager
-def _restored(signum: int, handler) -> Iterator[None]:
-    """Put ``handler`` back for ``signum`` at the end (a command run inside a test process)."""
+def _handled(signums: tuple[int, ...], handler) -> Iterator[None]:
+    """``handler`` for each of ``signums`` during the command; the previous ones put back
+    at the end (a command run inside a test process)."""
+    previous = {s: signal.signal(s, handler) for s in signums}
     try:
         yield
     finally:
-        signal.signal(signum, handler)
+        for signum, old in previous.items():
+            signal.signal(signum, old)
 
 
 @contextlib.contextmanager
 def _errors_reported() -> Iterator[None]:
-    """Two errors Hydra's error reporter (``hydra._internal.utils.run_and_report``) would
+    """Errors Hydra's error reporter (``hydra._internal.utils.run_and_report``) would
     print its own way, reported ours: a config that does not compose (an unknown key, a
     wrong type: one paragraph naming the key and the nearest valid keys, never a schema
-    class, and no hint to append the key with ``+``), and a sweep whose worker process
+    class, and no hint to append the key with ``+``), a sweep whose worker process
     died (joblib's ``TerminatedWorkerError``: one line instead of a traceback; the aborted
-    sweep's summary then says which jobs were lost). Hydra calls its reporter by module
+    sweep's summary then says which jobs were lost), and an error raised after a stop
+    signal (the signal's exception cut some library's code short, e.g. OmegaConf's between
+    the jobs of an in-process sweep): the stop, without a traceback. Hydra calls its reporter by module
     lookup, so it is wrapped for this command only.
     """
     from hydra._internal import utils as hydra_utils
@@ -175,6 +170,9 @@ def _errors_reported() -> Iterator[None]:
             except ConfigCompositionException as exc:
                 raise refuse("the configuration is refused", [composition_problem(exc)]) from None
             except Exception as exc:
+                stopped_by = interrupt.received()
+                if stopped_by is not None:  # an error of code the signal cut short: the stop it is
+                    raise interrupt.Stopped(stopped_by) from None
                 if type(exc).__name__ not in ("TerminatedWorkerError", "BrokenProcessPool"):
                     raise
                 first = (str(exc).strip().splitlines() or [type(exc).__name__])[0]
@@ -227,7 +225,8 @@ Examples:
   compliant-docking +tracking=mlflow ...                     (log to MLflow: docs/tracking.md)
   python -m compliant_docking.report runs/multirun/<date>/<time>      (tables and figures again)
 
-Exit status: 0 success, 1 the run failed (error, divergence), 3 the run's gate did not pass.
+Exit status: 0 success, 1 the run failed (error, divergence) or the command was refused,
+3 the run's gate did not pass, 130 / 143 / 129 stopped by Ctrl-C / SIGTERM / SIGHUP.
 Hydra's own options: --hydra-help, --cfg job (print the composed config), --info,
 -sc install=bash (shell completion: eval "$(compliant-docking -sc install=bash)").
 """

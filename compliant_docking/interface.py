@@ -22,6 +22,16 @@ from compliant_docking.sim.geometry.convex import CoacdSettings
 EXAMPLE_DIR = "assets/interfaces/keyed_cad"
 #: --quick: CoACD's sampling and tree search cut down
 QUICK = {"resolution": 500, "mcts_nodes": 10, "mcts_iterations": 30}
+#: the command-line option of each field of ConvertOptions (for the refusals)
+FLAGS = {
+    "lift": "--lift-mm",
+    "plug_mass": "--plug-mass",
+    "min_threshold": "--min-threshold",
+    "max_pieces": "--max-pieces",
+    "margin": "--margin-mm",
+    "bevel_deg": "--bevel-deg",
+    "audit_tolerance_deg": "--audit-tolerance-deg",
+}
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -128,9 +138,9 @@ def export_keyed(directory: str | Path, *overrides: str) -> tuple[Path, Path]:
     from compliant_docking.config.store import default_keyed
     from compliant_docking.sim.geometry.mesh import keyed_cad_pair, write_stl
 
+    plug_geometry, socket_geometry, _ = default_keyed(*overrides)  # checked before anything is written
     directory = Path(directory)
     directory.mkdir(parents=True, exist_ok=True)
-    plug_geometry, socket_geometry, _ = default_keyed(*overrides)
     plug, socket = keyed_cad_pair(plug_geometry, socket_geometry)
     paths = directory / "plug.stl", directory / "socket.stl"
     write_stl(paths[0], plug, scale=1000.0, name="keyed plug, mm")
@@ -139,11 +149,23 @@ def export_keyed(directory: str | Path, *overrides: str) -> tuple[Path, Path]:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """``python -m compliant_docking.interface``; the exit status (a signal: 128 + its number)."""
+    from compliant_docking.run import interrupt
+
+    return interrupt.handled("interface", lambda: _main(argv))
+
+
+def _main(argv: list[str] | None) -> int:
     parser = _parser()
     args = parser.parse_args(argv)
     if args.export_keyed:
         sides = () if args.sides is None else (f"tool.geometry.sides={args.sides}",)
-        for path in export_keyed(args.export_keyed, *sides):
+        try:
+            paths = export_keyed(args.export_keyed, *sides)
+        except ValueError as exc:  # e.g. --sides outside the keyed plug's range
+            print(f"error: --sides: {exc}", file=sys.stderr)
+            return 1
+        for path in paths:
             print(f"wrote {path}")
         return 0
     if not (args.plug and args.socket and args.out):
@@ -162,6 +184,11 @@ def main(argv: list[str] | None = None) -> int:
         lift=args.lift_mm * 1e-3,
         collision=args.collision,
     )
+    refused = options.problems()  # before anything is read or written
+    for name, text in refused:
+        print(f"error: {FLAGS.get(name, '--' + name)}: {text}", file=sys.stderr)
+    if refused:
+        return 1
     try:
         result = convert(args.plug, args.socket, args.out, options)
     except Refused as exc:

@@ -36,6 +36,18 @@ def run_cli(*args: str, cwd: Path | None = None, timeout: float = 300) -> subpro
     )
 
 
+def cli_in_process(capsys, *args: str) -> tuple[int, str]:
+    """``python -m compliant_docking args…`` in this process: (exit status, stderr). For
+    commands refused before anything runs (no worker processes, no subprocess start-up)."""
+    from compliant_docking.cli import main
+
+    try:
+        code = main(list(args))
+    except SystemExit as exc:
+        code = exc.code if isinstance(exc.code, int) else 1
+    return code, capsys.readouterr().err
+
+
 def push_at_tcp(sim, force=(0.0, 0.0, 0.0), moment=(0.0, 0.0, 0.0)) -> None:
     """A wrench acting at the TCP (world axes), applied through the tool body's
     ``xfrc_applied``. MuJoCo applies that at the body's centre of mass, so the moment gets

@@ -14,7 +14,10 @@ from compliant_docking.config.enums import (
     NullSpaceMetric,
     SE3Formulation,
 )
+from compliant_docking.config.resolvers import register as _register_resolvers
 from compliant_docking.config.store import load_config, register_schemas
+
+_register_resolvers()  # ${job_dir:…} in conf/config.yaml, in every process that imports the config
 
 __all__ = [
     "Cone",

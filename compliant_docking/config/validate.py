@@ -15,14 +15,19 @@ class name), what is allowed and the value given:
   quaternions, a non-zero stroke, the press within the settle time, the misalignment's
   fixed value or range, a plug that fits its socket (geometry checks of
   :mod:`compliant_docking.config.geometry`, named by their config keys), a start
-  position without a target;
+  position without a target, HQP's torque margin (``robot.max_torque`` > 4 ·
+  ``controller.eps_abs``);
+- **files**: ``robot.mjcf`` and a ``tool.mjcf`` / ``target.mjcf`` fragment exist;
 - **memory**: a run whose logs would not fit in the available memory
-  (:func:`memory_problem`; the simulation repeats the check with its exact step count
-  before it allocates anything).
+  (:func:`compliant_docking.config.memory.memory_problem`; the simulation repeats the
+  check with its exact step count before it allocates anything).
 
 The command line runs :func:`validate` before Hydra writes a run or sweep directory
 (compliant_docking/sweep/guard.py), and :func:`compliant_docking.run.runner.execute`
-runs it first for runs started from Python.
+runs it first for runs started from Python. What needs the robot's model or the planner
+(per-joint lists against the robot's joints, the planner's own refusals, the memory of a
+run whose length follows from the planner) is checked by
+:mod:`compliant_docking.run.preflight`, also before anything is written.
 """
 
 from __future__ import annotations
@@ -30,7 +35,6 @@ from __future__ import annotations
 import dataclasses
 import difflib
 import math
-import os
 from collections.abc import Callable
 from typing import Any
 
@@ -38,13 +42,10 @@ from omegaconf import DictConfig, ListConfig, OmegaConf
 
 from compliant_docking import CONF_DIR
 from compliant_docking.config import geometry, keyed
+from compliant_docking.config.memory import memory_problem
 from compliant_docking.config.ranges import field_range, problems, show
 from compliant_docking.config.schemas import Config
 
-#: memory a run needs per simulated step [bytes]: measured 1.2 kB (peak RSS of the default
-#: docking with impedance and with hqp, figures included, 20 000 → 80 000 steps:
-#: 320 → 393 MB), with room for controllers that log more per-step columns
-BYTES_PER_STEP = 2000
 #: lists with one value per joint (their length must agree)
 PER_JOINT = ("robot.velocity_limits", "robot.torque_limits", "robot.max_torque", "robot.ik_guess")
 #: quaternion settings, wxyz
@@ -289,6 +290,29 @@ def _relations(cfg: DictConfig) -> list[str]:
         )
     found += _misalignment(cfg, has_target)
     found += _interface(cfg, has_target)
+    found += _files(cfg, has_target)
+    eps_abs, max_torque = _get(cfg, "controller.eps_abs"), _get(cfg, "robot.max_torque")
+    if isinstance(eps_abs, (int, float)) and isinstance(max_torque, list) and min(max_torque) <= 4 * eps_abs:
+        found.append(  # controller=hqp keeps 2·eps_abs inside the torque clip (control/hqp/controller.py)
+            f"robot.max_torque must exceed 4·controller.eps_abs = {4 * eps_abs:g} N·m for every joint (the "
+            f"QP keeps twice its accuracy inside the clip); got {show(max_torque)}."
+        )
+    return found
+
+
+def _files(cfg: DictConfig, has_target: bool) -> list[str]:
+    """The MJCF files the run loads (the robot's, a fragment given as ``tool.mjcf`` or
+    ``target.mjcf``) exist: a missing file is refused before anything runs."""
+    from compliant_docking import looked_in, resolve_path
+
+    found = []
+    for kind in ("robot", "tool", "target") if has_target else ("robot", "tool"):
+        given = _get(cfg, f"{kind}.mjcf")
+        if isinstance(given, str) and given and not resolve_path(given).is_file():
+            found.append(
+                f"{kind}.mjcf must name an MJCF file; there is no such file (looked for {looked_in(given)}; "
+                f"got {given!r})."
+            )
     return found
 
 
@@ -368,70 +392,3 @@ def _pair_problem(cfg: DictConfig) -> str | None:
         "tool=cone_plug target=cone_socket or tool=keyed_plug target=keyed_socket, or a "
         "fragment file via tool.mjcf / target.mjcf."
     )
-
-
-# --------------------------------------------------------------------------- memory
-def run_length(cfg: DictConfig) -> tuple[float, str] | None:
-    """The run's simulated time and where it comes from, when the config alone gives it:
-    ``task.duration``, or the planner's ``trajectory.duration`` + ``task.settle_time``
-    (other planners' durations follow from the scene: the simulation checks them)."""
-    duration = _get(cfg, "task.duration")
-    if duration is not None:
-        return float(duration), f"task.duration = {duration:g} s"
-    planned, settle = _get(cfg, "trajectory.duration"), _get(cfg, "task.settle_time")
-    if isinstance(planned, (int, float)) and isinstance(settle, (int, float)):
-        return float(planned + settle), (
-            f"trajectory.duration + task.settle_time = {planned:g} + {settle:g} s"
-        )
-    return None
-
-
-def memory_problem(cfg: DictConfig, n_steps: int | None = None, available: int | None = None) -> str | None:
-    """Why the run of ``cfg`` cannot keep its logs in memory, or None.
-
-    ``n_steps``: the exact step count (the simulation knows it); by default the one
-    :func:`run_length` gives, if any. ``available``: bytes of memory (default:
-    :func:`available_memory`).
-    """
-    timestep = _get(cfg, "physics.timestep")
-    length = run_length(cfg)
-    steps: float
-    if n_steps is not None:
-        steps = float(n_steps)
-    elif length is None or not isinstance(timestep, (int, float)) or not timestep > 0:
-        return None
-    else:
-        steps = length[0] / timestep
-    needed = steps * BYTES_PER_STEP
-    available = available_memory() if available is None else available
-    if available is None or needed <= available:
-        return None
-    source = length[1] if length is not None else "the planned trajectory + task.settle_time"
-    return (
-        f"the run would simulate {steps:.3g} steps ({source} at physics.timestep = "
-        f"{timestep:g} s) and its logs would need about {_bytes(needed)} of memory, more than "
-        f"the {_bytes(available)} available: shorten the run (task.duration, or the trajectory "
-        "and task.settle_time) or raise physics.timestep."
-    )
-
-
-def available_memory() -> int | None:
-    """Bytes of memory available to a new allocation (Linux: MemAvailable), or None."""
-    try:
-        with open("/proc/meminfo", encoding="ascii") as meminfo:
-            for line in meminfo:
-                if line.startswith("MemAvailable:"):
-                    return int(line.split()[1]) * 1024
-    except (OSError, ValueError, IndexError):
-        pass
-    try:
-        return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
-    except (ValueError, OSError, AttributeError):
-        return None
-
-
-def _bytes(n: float) -> str:
-    """``1.5e12`` → ``"1.5 TB"``."""
-    units = ("B", "kB", "MB", "GB", "TB", "PB", "EB")
-    power = min(int(math.log10(n) // 3), len(units) - 1) if n >= 1 and math.isfinite(n) else 0
-    return f"{n / 1000**power:.3g} {units[power]}" if math.isfinite(n) else "unbounded"

@@ -274,6 +274,13 @@ def findings_markdown(
 
 
 def main(argv: list[str] | None = None) -> int:
+    """``python -m compliant_docking.results.findings``; the exit status (a signal: 128 + its number)."""
+    from compliant_docking.run import interrupt
+
+    return interrupt.handled("findings", lambda: _main(argv))
+
+
+def _main(argv: list[str] | None) -> int:
     parser = argparse.ArgumentParser(
         prog="python -m compliant_docking.results.findings",
         description="Write the HQP-vs-impedance finding (docs/findings.md) from a controller_comparison sweep.",
@@ -301,8 +308,10 @@ def main(argv: list[str] | None = None) -> int:
     if args.out is None:
         print(text)
     else:
+        from compliant_docking.run.files import atomic_write_text
+
         args.out.parent.mkdir(parents=True, exist_ok=True)
-        args.out.write_text(text, encoding="utf-8")
+        atomic_write_text(args.out, text)  # a stop leaves the old file or the new one, never half
         print(f"wrote {args.out}")
     return 0
 

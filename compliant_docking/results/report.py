@@ -33,6 +33,13 @@ from compliant_docking.run.rundir import read_metrics
 
 
 def main(argv: list[str] | None = None) -> int:
+    """``python -m compliant_docking.report``; the exit status (a signal: 128 + its number)."""
+    from compliant_docking.run import interrupt
+
+    return interrupt.handled("report", lambda: _main(argv))
+
+
+def _main(argv: list[str] | None) -> int:
     parser = argparse.ArgumentParser(
         prog="python -m compliant_docking.report",
         description="Rebuild the summary tables and comparison figures of a directory of runs.",

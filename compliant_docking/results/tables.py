@@ -17,14 +17,13 @@ import pandas as pd
 
 from compliant_docking.evaluation.registry import compared
 from compliant_docking.results.load import GROUPS, OVERRIDDEN
+from compliant_docking.run.rundir import FAILED_STATUSES
 
 SUCCESS_SECTION = "success"
 #: keys that repeat a configuration rather than define one
 REPEAT_KEYS = re.compile(r"(^|\.)seed$")
 #: overrides that change how a job reports, not what it simulates
 COSMETIC_KEYS = frozenset({"task.progress"})
-#: statuses counted as failed: an error, or a run stopped by Ctrl-C / SIGTERM
-FAILED_STATUSES = ("failed", "interrupted")
 #: statuses whose metrics do not measure a whole run (left out of the comparison's means)
 NOT_MEASURED = ("interrupted",)
 

@@ -45,6 +45,8 @@ CONFIG_FILE = "config.yaml"  # in HYDRA_DIR: the job's composed config
 OVERRIDES_FILE = "overrides.yaml"  # in HYDRA_DIR: the job's command-line overrides
 #: the sweep directory's record of the sweep (Hydra writes it)
 MULTIRUN_FILE = "multirun.yaml"
+#: statuses of a job that did not finish its simulation: never docked, whatever else its record says
+FAILED_STATUSES = ("failed", "interrupted")
 
 
 # --------------------------------------------------------------------------- metrics.json
@@ -56,14 +58,23 @@ def clean_record(record: dict) -> dict:
     }
 
 
+def consistent(record: dict) -> dict:
+    """The record with ``success`` false when its status is failed or interrupted: a job that
+    did not finish never counts as docked (the one rule of every writer and reader)."""
+    if record.get("status") in FAILED_STATUSES and record.get("success") is not False:
+        return {**record, "success": False}
+    return record
+
+
 def write_metrics(job_dir: Path, record: dict) -> None:
     """metrics.json: a flat JSON object; non-finite numbers become null."""
-    text = json.dumps(clean_record(record), indent=2, allow_nan=False) + "\n"
+    text = json.dumps(clean_record(consistent(record)), indent=2, allow_nan=False) + "\n"
     atomic_write_text(Path(job_dir) / METRICS_FILE, text)
 
 
 def read_metrics(job_dir: Path) -> tuple[dict | None, str | None]:
-    """The job's metrics.json as a dict, or (None, why it cannot be read)."""
+    """The job's metrics.json as a dict, or (None, why it cannot be read). A failed or
+    interrupted job reads as not docked even when its file says otherwise (:func:`consistent`)."""
     path = Path(job_dir) / METRICS_FILE
     if not path.is_file():
         return None, "no metrics.json (the job is still running, or its process died)"
@@ -73,7 +84,7 @@ def read_metrics(job_dir: Path) -> tuple[dict | None, str | None]:
         return None, f"metrics.json is not valid JSON (half-written?): {exc}"
     if not isinstance(record, dict):
         return None, "metrics.json is not a JSON object"
-    return record, None
+    return consistent(record), None
 
 
 # --------------------------------------------------------------------------- other files

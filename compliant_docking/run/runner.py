@@ -2,7 +2,7 @@
 
 Whatever happens, :func:`execute` ends the run directory with a ``metrics.json`` whose
 ``status`` is "ok", "incomplete" (shorter than its trajectory), "failed" (with ``error``:
-a one-line reason) or "interrupted" (Ctrl-C or SIGTERM: the time series so far is kept,
+a one-line reason) or "interrupted" (Ctrl-C, SIGTERM, SIGHUP: the time series so far is kept,
 and the interruption is raised again once the record is written). Every file is written atomically
 (temporary name, then rename), and ``metrics.json`` last, so a directory holding a
 ``metrics.json`` is finished. See docs/run_directory.md for the layout.
@@ -10,13 +10,10 @@ and the interruption is raised again once the record is written). Every file is 
 
 from __future__ import annotations
 
-import contextlib
-import signal
 import sys
-import threading
 import time
 import traceback
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -26,7 +23,7 @@ from omegaconf import DictConfig, OmegaConf
 
 from compliant_docking.evaluation.registry import CONTACT_KEYS, DOCKING_KEYS
 from compliant_docking.run import figures as run_figures
-from compliant_docking.run import provenance, rundir
+from compliant_docking.run import interrupt, provenance, rundir
 from compliant_docking.run.summary import display_path, format_summary
 from compliant_docking.sim.misalignment import record_for as misalignment_record
 
@@ -37,13 +34,6 @@ EXIT_SUCCESS, EXIT_FAILED, EXIT_GATE = 0, 1, 3
 def _one_line(exc: BaseException) -> str:
     text = str(exc).strip().replace("\n", " ") or type(exc).__name__
     return text if isinstance(exc, (ValueError, RuntimeError)) else f"{type(exc).__name__}: {text}"
-
-
-class Terminated(KeyboardInterrupt):
-    """SIGTERM during a single run (the command line's handler raises it): handled like
-    Ctrl-C, the run is recorded as interrupted and the command exits 143."""
-
-    signum = signal.SIGTERM
 
 
 @dataclass
@@ -75,9 +65,11 @@ def execute(
 
     The record starts with the fields naming the job (config choices, overrides). A
     failure of any kind is recorded (status "failed" and the reason), never raised. An
-    interruption (Ctrl-C: KeyboardInterrupt; SIGTERM: :class:`Terminated`) is recorded as
-    status "interrupted" with the time series simulated so far, then raised again so the
-    caller stops. ``figures``: draw the per-run figures; None: as the config's
+    interruption (Ctrl-C, SIGTERM, SIGHUP: a KeyboardInterrupt, :mod:`.interrupt`) is
+    recorded as status "interrupted" with the time series simulated so far, then raised
+    again so the caller stops; one that came while the command held the signals (between
+    the claim of the run directory and this call) is acted on first thing here, so the
+    directory gets its record. ``figures``: draw the per-run figures; None: as the config's
     ``figures`` says for a single run (:func:`compliant_docking.run.figures.wanted`).
     ``episode``: record that simulation instead of simulating ``cfg`` (then ``.hydra/`` is
     written here, as Hydra writes it for a run).
@@ -105,6 +97,7 @@ def execute(
         if episode is not None:
             mujoco_warnings.extend(episode.mujoco_warnings)
         try:
+            interrupt.release()  # a signal held since the run directory was claimed: recorded below
             validate(cfg)  # the command line did already; a run from Python gets the same checks
             show: Any = None
             if cfg.get("viewer"):  # MuJoCo's viewer at real time; refused in a sweep or without a display
@@ -130,7 +123,7 @@ def execute(
                 traceback.print_exc(file=sys.stderr)
         except KeyboardInterrupt as exc:  # Ctrl-C, SIGTERM: record what there is, then stop
             interrupted = exc
-    with _signals_deferred() as pending:  # a (second) Ctrl-C must not cut the record short
+    with interrupt.deferred() as pending:  # a (second) Ctrl-C must not cut the record short
         if interrupted is not None:
             record.update(_interrupted(sim, out_dir, interrupted))
         if sim is not None:
@@ -153,8 +146,7 @@ def execute(
             rundir.write_mujoco_log(out_dir, mujoco_warnings)
         record["wall_time_s"] = time.perf_counter() - started
         record.update(provenance.collect(cfg, started_at=started_at))  # versions, git, config hash
-        if record["status"] in ("failed", "interrupted"):
-            record["success"] = False
+        record = rundir.consistent(record)  # a job that did not finish never counts as docked
         summary = format_summary(record, cfg) + f"\n  run directory: {display_path(out_dir)}"
         if "video_error" in record:  # render=video: the video, or why there is none
             from compliant_docking.viz.render import summary_line
@@ -166,16 +158,15 @@ def execute(
         print(summary)
     if interrupted is not None:
         raise interrupted
-    if pending:  # Ctrl-C or SIGTERM while the record was written: the run is recorded, now stop
-        raise Terminated() if pending[0] == signal.SIGTERM else KeyboardInterrupt()
+    if pending:  # a signal while the record was written: the run is recorded, now stop
+        raise interrupt.Stopped(pending[0])
     return record
 
 
 def _interrupted(sim, out_dir: Path, exc: KeyboardInterrupt) -> dict:
     """The record's fields for a run stopped by ``exc``: status "interrupted", the reason,
     and the metrics and time series of the steps simulated so far."""
-    signum = getattr(exc, "signum", signal.SIGINT)
-    how = {signal.SIGINT: "SIGINT (Ctrl-C)", signal.SIGTERM: "SIGTERM"}.get(signum, f"signal {signum}")
+    how = interrupt.name(interrupt.signum_of(exc))
     fields: dict[str, Any] = {}
     when = " before the simulation started"
     if sim is not None and sim.telemetry.count:
@@ -187,25 +178,6 @@ def _interrupted(sim, out_dir: Path, exc: KeyboardInterrupt) -> dict:
             when += f" (the metrics of the partial run could not be computed: {_one_line(error)})"
     fields.update(status="interrupted", success=False, gate_failures=None, gate_verdict=None)
     return {**fields, "error": f"interrupted by {how}{when}"}
-
-
-@contextlib.contextmanager
-def _signals_deferred() -> Iterator[list[int]]:
-    """Hold SIGINT and SIGTERM while the record is written; the signals that arrived meanwhile
-    are yielded list's items (main thread only: elsewhere Python cannot change handlers)."""
-    pending: list[int] = []
-    if threading.current_thread() is not threading.main_thread():
-        yield pending
-        return
-    saved = {
-        s: signal.signal(s, lambda signum, frame: pending.append(signum))
-        for s in (signal.SIGINT, signal.SIGTERM)
-    }
-    try:
-        yield pending
-    finally:
-        for signum, handler in saved.items():
-            signal.signal(signum, handler)
 
 
 def evaluate(sim, out_dir: Path | None, *, figures: bool) -> dict:
@@ -304,7 +276,7 @@ def evaluate(sim, out_dir: Path | None, *, figures: bool) -> dict:
 def exit_status(record: dict) -> int:
     """0: succeeded, or finished with no gate to pass (success null); 1: failed or
     interrupted; 3: gate not passed."""
-    if record.get("status") in ("failed", "interrupted"):
+    if record.get("status") in rundir.FAILED_STATUSES:
         return EXIT_FAILED
     if record.get("status") == "ok" and record.get("success") is None:
         return EXIT_SUCCESS

@@ -126,6 +126,17 @@ def _load_fragment(kind: str, node: DictConfig, contact: DictConfig | None) -> t
     return spec, source, read_key(spec, source)
 
 
+def fragment_file_problem(kind: str, mjcf: str) -> str | None:
+    """Why the fragment file ``mjcf`` cannot be the ``kind`` ("tool", "target") of a scene,
+    or None: the checks :func:`build_scene` makes when it loads it, for the checks before a
+    run (compliant_docking/run/preflight.py)."""
+    try:
+        _load_fragment(kind, OmegaConf.create({"mjcf": mjcf}), None)
+    except ValueError as exc:
+        return str(exc)
+    return None
+
+
 def _check_pair(cfg: DictConfig) -> None:
     """Two parametric parts must be a pair that fits (a fragment file is the user's call)."""
     if cfg.tool.mjcf or cfg.target.mjcf:

@@ -23,7 +23,7 @@ import pinocchio as pin
 from hydra.utils import instantiate
 from omegaconf import DictConfig
 
-from compliant_docking.config.validate import memory_problem
+from compliant_docking.config.memory import memory_problem
 from compliant_docking.planning.base import (
     Planner,
     PressHome,
@@ -217,23 +217,26 @@ class _Progress:
             sys.stderr.flush()
 
 
-def prepare(cfg: DictConfig) -> Simulation:
-    """Build scene, arm, start posture, planner and controller for ``cfg``."""
-    scene = build_scene(cfg)
-    model, arm = scene.model, scene.arm
-    nv = model.nv
-    for key in ("velocity_limits", "torque_limits", "max_torque", "ik_guess"):
-        if len(cfg.robot[key]) != nv:
-            raise ValueError(
-                f"robot.{key} has {len(cfg.robot[key])} values; robot {cfg.robot.name} has {nv} joints"
-            )
-    if np.any(np.asarray(cfg.robot.max_torque, float) <= 0.0):
-        raise ValueError(f"robot.max_torque must be > 0 for every joint, got {list(cfg.robot.max_torque)}")
+#: the robot's lists with one value per joint
+PER_JOINT_KEYS = ("velocity_limits", "torque_limits", "max_torque", "ik_guess")
 
-    waypoints = task_waypoints(cfg, scene)
+
+def joint_problems(cfg: DictConfig, nv: int) -> list[str]:
+    """The robot's per-joint lists whose length is not the robot's ``nv`` joints."""
+    return [
+        f"robot.{key} has {len(cfg.robot[key])} values; robot {cfg.robot.name} has {nv} joints: "
+        "give one value per joint."
+        for key in PER_JOINT_KEYS
+        if len(cfg.robot[key]) != nv
+    ]
+
+
+def plan(cfg: DictConfig, waypoints: Waypoints) -> Planner:
+    """The planner of ``cfg`` (the `trajectory` config group) for ``waypoints``, followed by
+    the press home when the task presses (:class:`PressHome`); raises ValueError for a
+    planner that cannot serve the task."""
     # _partial_: the config's parameters are bound first, the run-time objects passed
     # directly (instantiate would otherwise turn dataclass arguments into dicts)
-    # the `trajectory` config group chooses the planner
     planner = instantiate(cfg.trajectory, _partial_=True, _convert_="all")(waypoints=waypoints)
     overshoot = float(cfg.task.insertion_overshoot)
     if waypoints.goal is not None and overshoot != 0.0:
@@ -244,6 +247,22 @@ def prepare(cfg: DictConfig) -> Simulation:
                 f"happens after the planned motion, while the run settles"
             )
         planner = PressHome(planner, overshoot * waypoints.axis, cfg.task.press_duration)
+    return planner
+
+
+def prepare(cfg: DictConfig) -> Simulation:
+    """Build scene, arm, start posture, planner and controller for ``cfg``."""
+    scene = build_scene(cfg)
+    model, arm = scene.model, scene.arm
+    nv = model.nv
+    wrong = joint_problems(cfg, nv)
+    if wrong:
+        raise ValueError(wrong[0])
+    if np.any(np.asarray(cfg.robot.max_torque, float) <= 0.0):
+        raise ValueError(f"robot.max_torque must be > 0 for every joint, got {list(cfg.robot.max_torque)}")
+
+    waypoints = task_waypoints(cfg, scene)
+    planner = plan(cfg, waypoints)
     duration, notes = run_duration(cfg, planner)
     ref = Reference()
     planner.sample(0.0, ref)

@@ -55,6 +55,21 @@ def task_waypoints(cfg: DictConfig, scene: Scene) -> Waypoints:
     return Waypoints(start=pin.SE3(rot, start_pos), goal=pin.SE3(rot, start_pos + stroke), axis=axis)
 
 
+def nominal_waypoints(cfg: DictConfig) -> Waypoints:
+    """The task's waypoints from the config alone, up to a rigid motion of the whole path:
+    :func:`task_waypoints` places the goal at start + ``task.stroke`` with the start's
+    orientation, so the planner's duration and its own checks are those of the run.
+    For the checks before a run (compliant_docking/run/preflight.py); no scene needed."""
+    task = cfg.task
+    stroke = np.asarray(task.stroke, dtype=float)
+    length = float(np.linalg.norm(stroke))
+    start = pin.SE3(np.eye(3), np.zeros(3) if task.init_pos is None else np.asarray(task.init_pos, float))
+    axis = stroke / length if length > 0 else np.array([0.0, 0.0, 1.0])
+    if cfg.target.get("name") in (None, "none"):
+        return Waypoints(start=start, goal=None, axis=axis)
+    return Waypoints(start=start, goal=pin.SE3(np.eye(3), start.translation + stroke), axis=axis)
+
+
 def keyed_rotation(seat: np.ndarray, symmetry: int, near: np.ndarray) -> np.ndarray:
     """The mated tcp orientation (world) for a seat orientation ``seat`` and a key of
     ``symmetry``: seat · Rx(180°) · Rz(360°·k/symmetry), the k nearest to ``near``."""

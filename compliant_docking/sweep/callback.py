@@ -29,6 +29,7 @@ from hydra.experimental.callback import Callback
 from omegaconf import DictConfig
 
 from compliant_docking.sweep import resume
+from compliant_docking.sweep.directories import sweep_dir_of
 from compliant_docking.sweep.launchers import describe, is_submitit
 from compliant_docking.sweep.progress import ProgressWatcher, display, emit, job_line
 from compliant_docking.sweep.session import SweepSession
@@ -108,7 +109,7 @@ class SweepCallback(Callback):
     ``resume``: the sweep resumes the one in its directory (set by ``resume=<sweep dir>``).
     ``strict``: exit status 1 when a job failed; false (the tuning presets): a failed job
     is a result like one that did not dock (the tuning sweeper penalises it), and only
-    an aborted sweep exits with 1.
+    an aborted sweep, or one in which every job failed, exits with 1.
     """
 
     def __init__(
@@ -122,12 +123,8 @@ class SweepCallback(Callback):
 
     # -- parent process
     def on_multirun_start(self, config: DictConfig, **kwargs: Any) -> None:
-        resumed: list[str] = []
-        if self.resume:  # before anything is written; SystemExit passes Hydra's callback guard
-            try:
-                resumed = resume.check_sweep(config)
-            except resume.ResumeError as exc:
-                raise SystemExit(resume.fail(exc)) from None
+        # a resume: the guard checked the command against the sweep; say what it will find
+        resumed = resume.status_lines(Path(str(config.hydra.sweep.dir))) if self.resume else []
         self.total = expected_jobs(config)
         sweep_dir = Path(str(config.hydra.sweep.dir))
         independent = is_submitit(config.hydra.launcher)
@@ -157,7 +154,7 @@ class SweepCallback(Callback):
             from hydra.core.utils import JobStatus
 
             out_dir = Path(str(config.hydra.runtime.output_dir))
-            sweep_dir = Path(str(config.hydra.sweep.dir)).resolve()
+            sweep_dir = sweep_dir_of(config.hydra)  # also with hydra.job.chdir=true
             line = job_line(out_dir, sweep_dir, self.total)
             note = job_return.return_value if job_return.status == JobStatus.COMPLETED else None
             if isinstance(note, str):  # resume: skipped, or why it ran again

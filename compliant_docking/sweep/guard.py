@@ -5,13 +5,15 @@ before the sweep callback) runs in the launching process after Hydra composed th
 config and before Hydra creates any directory:
 
 - **one run** (``on_run_start``): the composed config is validated
-  (:func:`compliant_docking.config.validate.validate`: unknown keys added with ``+``/``++``,
-  NaN, inf, values outside their ranges, relations, memory), ``viewer=true`` needs a
-  display, and the run directory is claimed (below);
-- **a sweep** (``on_multirun_start``): every job's config is composed exactly as Hydra's
-  basic sweeper will compose it, so an unknown option (``robot=ur5``), a bad value in one
-  job or ``viewer=true`` refuses the whole sweep before its directory exists; then the
-  sweep directory is claimed. Hydra's sweeper composes every job a second time to check
+  (:func:`job_problems`: unknown keys added with ``+``/``++``, NaN, inf, values outside
+  their ranges, relations, files, memory; then what needs the robot's model or the
+  planner, :mod:`compliant_docking.run.preflight`), ``viewer=true`` needs a display, and
+  the run directory is claimed (below);
+- **a sweep** (``on_multirun_start``): the launcher can run here (Slurm's ``sbatch`` for
+  ``submitit_slurm``), every job's config is composed exactly as Hydra's basic sweeper
+  will compose it and checked like a run's, so an unknown option (``robot=ur5``), a bad
+  value in one job or ``viewer=true`` refuses the whole sweep before its directory exists;
+  then the sweep directory is claimed. Hydra's sweeper composes every job a second time to check
   it (``validate_batch_is_legal``, after it created the sweep directory); the guard hands
   it the configs it composed (:class:`_Composed`), so the check costs nothing extra.
 
@@ -20,13 +22,14 @@ with status 1 through :class:`Refused` (a ``SystemExit``: Hydra lets it through 
 callback guard); nothing is created, and the command line neither summarises the sweep
 nor suggests a resume.
 
-**Claiming a directory.** The default names (``runs/<date>/<time>_<robot>_…``,
-``runs/multirun/<date>/<time>``) have a resolution of one second: two commands started in
-the same second would share a directory. The guard creates the directory itself
-(``os.mkdir`` is atomic: of two processes exactly one creates a name) and, when the name
-is taken, takes the next free ``<name>_2``, ``<name>_3``… A directory given explicitly
-(``hydra.run.dir=…``, ``hydra.sweep.dir=…``, ``resume=…``) is used as given, after
-checking that it can be written.
+**Claiming a directory** (:mod:`compliant_docking.sweep.directories`, after every check
+passed): a default name that is taken becomes ``<name>_2``, ``<name>_3``… (two commands in
+the same second); an explicit one (``hydra.run.dir=…``, ``hydra.sweep.dir=…``) must be new
+or empty and outside any other sweep; a resumed sweep (``resume=…``) and a tuning study
+continue their own directory. Every job of a sweep must get a directory of its own inside
+the sweep's (``hydra.sweep.subdir``). A sweeper other than Hydra's basic one that offers
+``problems(config)`` (the tuning sweeper: search space, objective, its stored study) is
+asked before the claim too.
 
 **Orphaned workers.** In a joblib sweep the guard also starts a watchdog in every worker
 process (``on_job_start``): when the launching process is gone (killed with SIGKILL, its
@@ -43,12 +46,11 @@ from pathlib import Path
 from typing import Any
 
 from hydra.experimental.callback import Callback
-from omegaconf import DictConfig, OmegaConf, read_write
+from omegaconf import DictConfig, OmegaConf
 
+from compliant_docking.run import interrupt
+from compliant_docking.sweep.directories import claim, job_dir_problems, job_subdir
 from compliant_docking.sweep.watchdog import start_watchdog
-
-#: largest suffix tried for a taken directory name (``<name>_2`` … ``<name>_999``)
-MAX_SUFFIX = 999
 
 
 class Refused(SystemExit):
@@ -79,9 +81,7 @@ class Guard(Callback):
     def on_run_start(self, config: DictConfig, **kwargs: Any) -> None:
         from hydra.core.hydra_config import HydraConfig
 
-        from compliant_docking.config.validate import check
-
-        problems = check(config)
+        problems = job_problems(config)
         if not problems and config.get("viewer"):
             from compliant_docking.viz.viewer import refusal
 
@@ -90,22 +90,43 @@ class Guard(Callback):
         if problems:
             raise refuse("the configuration is refused", problems)
         HydraConfig.instance().set_config(config)  # hydra.run.dir reads ${hydra:runtime.choices…}
+        # from the claim on, a signal waits until the runner can record it (run/interrupt.py)
+        interrupt.hold()
         problem = claim(config, "run")
         if problem:
             raise refuse("the run cannot start", [problem])
 
     # -- a sweep
     def on_multirun_start(self, config: DictConfig, **kwargs: Any) -> None:
-        from compliant_docking.sweep.launchers import is_submitit
+        from compliant_docking.sweep.launchers import is_submitit, launcher_problem
         from compliant_docking.sweep.pool import start_early
         from compliant_docking.sweep.workers import stop_early
 
-        workers_started = start_early(config.hydra.launcher)  # they import while the jobs are checked
-        problems: list[str] = []
-        jobs = check_jobs(config, problems)
+        resumed = bool(OmegaConf.select(config, "hydra.callbacks.sweep.resume", default=False))
+        if resumed:  # the command must be the sweep's (sweep/resume.py)
+            from compliant_docking.sweep import resume
+
+            try:
+                resume.check_sweep(config)
+            except resume.ResumeError as exc:
+                raise SystemExit(resume.fail(exc)) from None
+        launcher = launcher_problem(config.hydra.launcher)
+        # the pool's workers import the libraries while the jobs are checked
+        workers_started = not launcher and start_early(config.hydra.launcher)
+        problems: list[str] = [launcher] if launcher else []
+        jobs, subdirs = check_jobs(config, problems)
+        sweeper = checking_sweeper(config)  # e.g. the tuning sweeper: its set-up, its study
+        if sweeper is not None and not problems:
+            problems += sweeper.problems(config)
+        sweep_dir = Path(str(config.hydra.sweep.dir))
+        if resumed and subdirs and not problems and sweep_dir.is_dir():
+            from compliant_docking.sweep.resume import foreign_job_dirs
+
+            foreign = foreign_job_dirs(sweep_dir, subdirs)
+            problems += [foreign] if foreign else []
         composed_for = str(config.hydra.sweep.dir)
-        if not problems:
-            problem = claim(config, "sweep")
+        if not problems:  # a resumed sweep or a tuning study continues its directory
+            problem = claim(config, "sweep", continued=resumed or sweeper is not None)
             if problem:
                 problems.append(problem)
         if problems:
@@ -141,24 +162,54 @@ def job_overrides(config: DictConfig) -> list[list[str]] | None:
     return [list(job) for batch in batches for job in batch]
 
 
-def check_jobs(config: DictConfig, problems: list[str]) -> dict[tuple[str, ...], DictConfig]:
+def checking_sweeper(config: DictConfig) -> Any:
+    """The sweep's sweeper when it is not Hydra's basic one and checks its own set-up before
+    anything is created (a ``problems(config)`` method, like the tuning sweeper's), else None.
+    Such a sweeper keeps its study in its directory and continues it when run again."""
+    from hydra.utils import get_class, instantiate
+
+    target = str(config.hydra.sweeper.get("_target_", ""))
+    if not target or target.endswith("BasicSweeper"):
+        return None
+    try:
+        if not callable(getattr(get_class(target), "problems", None)):
+            return None
+    except Exception:  # not importable: Hydra says so when it instantiates it
+        return None
+    return instantiate(config.hydra.sweeper)
+
+
+def job_problems(config: DictConfig) -> list[str]:
+    """Every problem of one job's composed config: the config layer's check, then what
+    needs the robot's model or the planner (:mod:`compliant_docking.run.preflight`)."""
+    from compliant_docking.config.validate import check
+    from compliant_docking.run import preflight
+
+    return check(config) or preflight.problems(config)
+
+
+def check_jobs(
+    config: DictConfig, problems: list[str]
+) -> tuple[dict[tuple[str, ...], DictConfig], list[str]]:
     """Compose and validate every job of the sweep; append the problems (each distinct
-    problem once, with the jobs that have it); the composed configs by overrides."""
+    problem once, with the jobs that have it); the composed configs by overrides, and each
+    job's directory relative to the sweep's (in job order; [] for another sweeper)."""
     from hydra.core.global_hydra import GlobalHydra
 
-    from compliant_docking.config.validate import check, composition_problem
+    from compliant_docking.config.validate import composition_problem
 
     try:
         jobs = job_overrides(config)
     except Exception as exc:  # a malformed sweep list
         problems.append(composition_problem(exc))
-        return {}
+        return {}, []
     if jobs is None:  # another sweeper: check the primary config only
-        problems += check(config)
-        return {}
+        problems += job_problems(config)
+        return {}, []
     loader = GlobalHydra.instance().config_loader()
     found: dict[str, list[int]] = defaultdict(list)
     composed: dict[tuple[str, ...], DictConfig] = {}
+    subdirs: dict[int, str] = {}  # each job's directory in the sweep
     for num, overrides in enumerate(jobs):
         try:
             job = loader.load_sweep_config(config, list(overrides))
@@ -166,19 +217,22 @@ def check_jobs(config: DictConfig, problems: list[str]) -> dict[tuple[str, ...],
             found[composition_problem(exc)].append(num)
             continue
         composed[tuple(overrides)] = job
-        job_problems = check(job)
+        subdirs[num] = job_subdir(job, num)
+        problems_of_job = job_problems(job)
         if job.get("viewer"):
             from compliant_docking.viz.viewer import refusal
 
-            job_problems.append(f"{refusal(multirun=True)}.")
-        for problem in job_problems:
+            problems_of_job.append(f"{refusal(multirun=True)}.")
+        for problem in problems_of_job:
             found[problem].append(num)
+    if not found:  # every job composes: each must get a directory of its own inside the sweep
+        problems += job_dir_problems(subdirs)
     for problem, nums in found.items():
         example = f"job {nums[0]}: {' '.join(jobs[nums[0]]) or 'no overrides'}"
         if len(nums) > 1:
             example = f"jobs {', '.join(map(str, nums[:10]))}{', …' if len(nums) > 10 else ''}; {example}"
         problems.append(f"{problem} [{example}]")
-    return composed
+    return composed, [subdirs[num] for num in sorted(subdirs)]
 
 
 class _Composed:
@@ -214,89 +268,3 @@ class _Composed:
         if found is not None:
             return found
         return type(self.loader).load_sweep_config(self.loader, master_config, sweep_overrides)
-
-
-# --------------------------------------------------------------------------- directories
-def claim(config: DictConfig, kind: str, *, explicit: bool | None = None) -> str | None:
-    """Make sure the run or sweep (``kind``) directory of ``config`` is this command's and
-    writable: a default name that is taken becomes ``<name>_2``, ``<name>_3``… (updated in
-    ``config``); an explicit one is checked for writing only. Why not, or None.
-
-    ``explicit``: the directory was named by the user (default: ``hydra.<kind>.dir`` is
-    among the command's Hydra overrides).
-    """
-    key = f"hydra.{kind}.dir"
-    path = Path(str(OmegaConf.select(config, key)))
-    if explicit is None:
-        explicit = any(str(o).split("=", 1)[0].lstrip("+") == key for o in config.hydra.overrides.hydra)
-    if explicit:
-        return _writable(path, key)
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        for n in range(1, MAX_SUFFIX + 1):
-            candidate = path if n == 1 else path.with_name(f"{path.name}_{n}")
-            try:
-                candidate.mkdir()
-                break
-            except FileExistsError:
-                continue
-        else:
-            return f"{key}: {path} and its {MAX_SUFFIX - 1} numbered variants are all taken; set {key}=<dir>."
-    except OSError as exc:
-        return (
-            f"{key}: cannot create {path}: {exc.strerror or exc}; choose another directory with {key}=<dir>."
-        )
-    CLAIMED.append(candidate)
-    if candidate != path:
-        with read_write(config.hydra):
-            OmegaConf.update(config, key, str(candidate))
-            if kind == "sweep":  # the jobs compose their config again from the overrides
-                config.hydra.overrides.hydra.append(f"{key}={_quoted(str(candidate))}")
-    return None
-
-
-#: the directories :func:`claim` created in this process (see :func:`release_empty`)
-CLAIMED: list[Path] = []
-
-
-def release_empty() -> None:
-    """Remove the directories this process claimed that stayed empty (a sweep sweeper that
-    refused its set-up after the claim, e.g. the tuning sweeper): a refused command leaves
-    nothing behind. A directory with anything in it stays."""
-    while CLAIMED:
-        path = CLAIMED.pop()
-        try:
-            path.rmdir()  # only an empty directory
-        except OSError:
-            pass
-
-
-def _writable(path: Path, key: str) -> str | None:
-    """Why ``path`` (existing, or to be created) cannot be written, or None. Tried for real
-    (a probe directory created and removed in ``path`` or its nearest existing parent):
-    permission bits do not tell for root or a read-only file system."""
-    import tempfile
-
-    existing = path
-    while not existing.exists() and existing != existing.parent:
-        existing = existing.parent
-    if not existing.is_dir():
-        return f"{key}={path}: {existing} is not a directory; choose another directory with {key}=<dir>."
-    try:
-        os.rmdir(tempfile.mkdtemp(prefix=".write-probe-", dir=existing))
-    except OSError as exc:
-        return (
-            f"{key}={path}: cannot write in {existing} ({exc.strerror or exc}); "
-            f"choose another directory with {key}=<dir>."
-        )
-    return None
-
-
-def _quoted(path: str) -> str:
-    """``path`` as the value of a Hydra override."""
-    from compliant_docking.sweep.resume import ResumeError, _override_value
-
-    try:
-        return _override_value(path)
-    except ResumeError:
-        return path

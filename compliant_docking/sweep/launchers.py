@@ -57,6 +57,28 @@ def is_submitit(launcher_cfg: Any) -> bool:
     return ".hydra_submitit_launcher." in _target(launcher_cfg)
 
 
+def launcher_problem(launcher_cfg: Any) -> str | None:
+    """Why the launcher of ``hydra.launcher`` cannot run jobs on this machine, or None:
+    submitit not installed, or ``hydra/launcher=submitit_slurm`` without Slurm's ``sbatch``
+    (the guard refuses the sweep before anything is created)."""
+    import importlib.util
+    import shutil
+
+    target = _target(launcher_cfg)
+    if not is_submitit(launcher_cfg):
+        return None
+    name = "submitit_slurm" if target.endswith(".SlurmLauncher") else "submitit_local"
+    if importlib.util.find_spec("submitit") is None:
+        return f"hydra/launcher={name} needs submitit, which is not installed: pip install hydra-submitit-launcher."
+    if name == "submitit_slurm" and shutil.which("sbatch") is None:
+        return (
+            "hydra/launcher=submitit_slurm needs Slurm, and this machine has no sbatch on its PATH: "
+            "start the sweep on the cluster's login node, or run it here with hydra/launcher=local "
+            "(the default) or hydra/launcher=submitit_local."
+        )
+    return None
+
+
 def describe(launcher_cfg: Any) -> str | None:
     """How a submitit launcher runs the jobs, for the sweep's header line (None for others)."""
     target = _target(launcher_cfg)

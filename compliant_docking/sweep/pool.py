@@ -17,10 +17,12 @@ BLAS/OpenMP thread counts set to cores ÷ workers as joblib does) with two chang
 
 Everything else is Hydra's: its ``run_job`` (job directory, ``.hydra/`` files, logging,
 callbacks), its results in job order, its error when a job's process dies
-(``TerminatedWorkerError``, as with joblib). On any exception — a dead worker, Ctrl-C,
-SIGTERM — the workers are killed before it propagates, so the summary of an aborted
-sweep (:meth:`~compliant_docking.sweep.session.SweepSession.finish_aborted`) runs after
-they are gone, as with joblib; a sweeper that launches batch after batch (the tuning
+(``TerminatedWorkerError``, as with joblib). On any exception — a dead worker, a signal
+(Ctrl-C, SIGTERM, SIGHUP; the workers themselves ignore SIGINT and SIGHUP and leave them
+to the launching process) — the jobs not started are cancelled and the workers killed
+and waited for before it propagates, so no job starts after it and the summary of an
+aborted sweep (:meth:`~compliant_docking.sweep.session.SweepSession.finish_aborted`)
+runs after they are gone; a sweeper that launches batch after batch (the tuning
 study, which goes on after a failed batch) gets new workers for the next one. A job
 whose config the sweeper did not check is composed here, in the launching process. Of
 the joblib launcher's keys (the schema is kept, so ``hydra.launcher.n_jobs=N`` works as
@@ -29,8 +31,9 @@ before) only ``n_jobs`` is read.
 
 from __future__ import annotations
 
+import contextlib
 import logging
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -87,14 +90,18 @@ class PoolLauncher(Launcher):
         from joblib.externals.loky import get_reusable_executor
 
         n = self.workers()
-        return get_reusable_executor(
-            max_workers=n, timeout=IDLE_WORKER_TIMEOUT_S, env=LokyBackend()._prepare_worker_env(n_jobs=n)
-        )
+        _quiet_resource_tracker()
+        with _signals_left_to_the_launcher():
+            return get_reusable_executor(
+                max_workers=n, timeout=IDLE_WORKER_TIMEOUT_S, env=LokyBackend()._prepare_worker_env(n_jobs=n)
+            )
 
     def _start_workers(self) -> None:
         executor = self._executor()
-        for _ in range(self.workers()):  # each worker imports the job's libraries while the sweeper checks
-            executor.submit(_import_job_libraries)
+        with _signals_left_to_the_launcher():
+            # each worker imports the job's libraries while the sweeper checks
+            for _ in range(self.workers()):
+                executor.submit(_import_job_libraries)
 
     def launch(self, job_overrides: Sequence[Sequence[str]], initial_job_idx: int) -> Sequence[JobReturn]:
         from hydra.core.singleton import Singleton
@@ -113,21 +120,22 @@ class PoolLauncher(Launcher):
             log.info(f"\t#{initial_job_idx + idx} : {' '.join(filter_overrides(overrides))}")
         singleton_state = Singleton.get_state()
         executor = self._executor()
+        futures: list = []
         try:
-            futures = [
-                executor.submit(
-                    execute_job,
-                    initial_job_idx + idx,
-                    cfg,
-                    self.hydra_context,
-                    self.task_function,
-                    singleton_state,
+            for idx, cfg in enumerate(configs):
+                futures.append(
+                    executor.submit(
+                        execute_job,
+                        initial_job_idx + idx,
+                        cfg,
+                        self.hydra_context,
+                        self.task_function,
+                        singleton_state,
+                    )
                 )
-                for idx, cfg in enumerate(configs)
-            ]
             return [future.result() for future in futures]
-        except BaseException:  # a dead worker, Ctrl-C, SIGTERM: stop the others before going on
-            _kill_workers(executor)
+        except BaseException:  # a dead worker, a signal: no job starts from here on
+            _kill_workers(executor, futures)
             raise
         finally:  # every job has been sent: keep the checked configs of a next batch (a tuning study)
             if keeping is not None:
@@ -139,21 +147,87 @@ class PoolLauncher(Launcher):
 _abandoned_threads = False
 
 
-def _kill_workers(executor) -> None:
-    """Kill every worker at once (SIGKILL) and let the executor go without joining its
-    threads. A worker killed while it wrote a result (a SIGTERM or Ctrl-C to the process
-    group reaches the workers too) leaves half a message in the result pipe; loky's
-    manager thread then waits for the rest forever, and ``shutdown(wait=True)`` with it
-    (seen: a SIGTERM'd sweep that never exited)."""
+def _kill_workers(executor, futures: Sequence = ()) -> None:
+    """Stop the sweep's jobs at once: cancel the jobs not yet started, kill every worker
+    (SIGKILL, by process id: loky's process objects have no ``kill``) and wait for each to
+    be gone, then let the executor go without joining its threads. A worker killed while
+    it wrote a result (a signal to the process group reaches the workers too) leaves half
+    a message in the result pipe; loky's manager thread then waits for the rest forever,
+    and ``shutdown(wait=True)`` with it (seen: a SIGTERM'd sweep that never exited). When
+    this returns, no job of the sweep runs or will start."""
+    import os
+    import signal
+
     global _abandoned_threads
-    for process in list(getattr(executor, "_processes", {}).values()):
+    for future in futures:
+        future.cancel()  # queued, not started: never runs
+    processes = list(getattr(executor, "_processes", {}).values())
+    for process in processes:
         try:
-            process.kill()
-            process.join(timeout=5)
-        except Exception:  # already gone
+            os.kill(process.pid, signal.SIGKILL)
+        except (OSError, TypeError):  # gone already (or never started)
             pass
+    for process in processes:
+        _wait_gone(process.pid)
     executor.shutdown(wait=False, kill_workers=True)
     _abandoned_threads = True
+
+
+#: the interpreter option that silences loky's resource tracker's warnings (its module)
+QUIET_TRACKER = "ignore::UserWarning:joblib.externals.loky.backend.resource_tracker"
+
+
+def _quiet_resource_tracker() -> None:
+    """Start loky's resource tracker without its warnings: when an aborted sweep kills its
+    workers, the tracker frees their semaphores itself and says "There appear to be N
+    leaked semlock objects to clean up at shutdown" on the console after the sweep's
+    summary. loky starts it with this interpreter's ``-W`` options (``sys.warnoptions``);
+    the filter names the tracker's module only."""
+    import sys
+
+    if QUIET_TRACKER not in sys.warnoptions:
+        sys.warnoptions.append(QUIET_TRACKER)
+
+
+@contextlib.contextmanager
+def _signals_left_to_the_launcher() -> Iterator[None]:
+    """Start loky's processes (its workers, its resource tracker) ignoring SIGINT and
+    SIGHUP, which a terminal sends to the whole process group (Ctrl-C, closing it): the
+    launching process handles them (it stops the sweep and kills the workers:
+    run/interrupt.py), while a worker interrupted itself printed a traceback when it was
+    still importing, and a resource tracker killed by a hang-up was started again by loky
+    and printed tracebacks for the resources it lost. An ignored signal stays ignored in a
+    started process; the launching process ignores them only while loky starts its
+    processes (main thread only). SIGTERM is left as it is: it ends a worker."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = {s: signal.signal(s, signal.SIG_IGN) for s in (signal.SIGINT, signal.SIGHUP)}
+    try:
+        yield
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
+
+
+def _wait_gone(pid: int, timeout_s: float = 5.0) -> None:
+    """Wait until the process ``pid`` (a child of this one) is gone: reaped by loky's
+    manager thread, or by us."""
+    import os
+    import time
+
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        try:
+            done, _ = os.waitpid(pid, os.WNOHANG)
+        except ChildProcessError:  # reaped elsewhere (loky's manager thread): gone
+            return
+        if done == pid:
+            return
+        time.sleep(0.01)
 
 
 def abandoned_threads() -> bool:

@@ -15,7 +15,7 @@ import sys
 import threading
 from pathlib import Path
 
-from compliant_docking.run.rundir import METRICS_FILE, read_metrics
+from compliant_docking.run.rundir import FAILED_STATUSES, METRICS_FILE, read_metrics
 
 #: how often :class:`ProgressWatcher` looks for finished jobs [s]
 POLL_INTERVAL_S = 2.0
@@ -60,12 +60,14 @@ def next_count(sweep_dir: Path) -> int | None:
     One exclusive lock (``flock``) on ``<sweep>/.finished_jobs`` around reading the count
     and writing it plus one: constant time per job, whatever the sweep's size, and safe
     across processes (and across machines on a file system with POSIX locks, e.g. NFSv4).
-    None when the file cannot be locked (no count is printed rather than a wrong one).
+    None when the file cannot be locked, or is gone (no count is printed rather than a wrong
+    one): the launching process creates it when the sweep starts and removes it when the
+    sweep is summarised, so a job that ends later (an aborted sweep's) never recreates it.
     """
     try:
         import fcntl
 
-        fd = os.open(Path(sweep_dir) / COUNT_FILE, os.O_RDWR | os.O_CREAT, 0o644)
+        fd = os.open(Path(sweep_dir) / COUNT_FILE, os.O_RDWR)
     except (ImportError, OSError):
         return None
     try:
@@ -100,7 +102,7 @@ def job_line(out_dir: Path, sweep_dir: Path, total: int | None, done: int | None
         str(status), str(status)
     )
     parts = [f"{count} {out_dir.name}", shown_status]
-    if status not in ("failed", "interrupted"):
+    if status not in FAILED_STATUSES:
         parts.append(docked)
         peak, raw = record.get("filtered_peak_axial_force_N"), record.get("peak_axial_force_N")
         if peak is None:
@@ -112,7 +114,7 @@ def job_line(out_dir: Path, sweep_dir: Path, total: int | None, done: int | None
             parts.append(f"{events:.0f} contact events/s")
     wall = record.get("wall_time_s")
     parts.append("n/a" if wall is None else f"{wall:.1f} s")
-    if status in ("failed", "interrupted") and record.get("error"):
+    if status in FAILED_STATUSES and record.get("error"):
         parts.append(str(record["error"])[:160])
     elif success is False and record.get("gate_verdict"):
         parts.append(str(record["gate_verdict"])[:160])  # what failed

@@ -9,10 +9,14 @@ sweep directory. Resuming runs the same sweep again into the same directory:
   the Hydra overrides ``hydra.sweep.dir=<dir> hydra.callbacks.sweep.resume=true
   hydra.output_subdir=null``. ``resume`` is not a task override, so the jobs' names,
   ``.hydra/overrides.yaml`` and composed configs are the same as in the first run.
-- :func:`check_sweep` (the sweep callback, launching process, before any job starts)
-  refuses a directory without ``multirun.yaml`` or a command whose task overrides or
+- :func:`check_sweep` (the guard, launching process, before anything is created)
+  refuses a directory without ``multirun.yaml``, a command whose task overrides or
   preset lists differ from the ones the sweep was started with (jobs would get other
-  numbers and names), and prints what it found.
+  numbers and names), or whose Hydra overrides name the jobs' directories otherwise
+  (``hydra.sweep.subdir``, ``hydra.job.*``). The guard then checks that every job's
+  directory lies inside the sweep directory, one per job, and that the sweep holds no job
+  directory this command's jobs would not write (:func:`foreign_job_dirs`); the sweep
+  callback prints what the resume will find (:func:`status_lines`).
 - In each job, :func:`assess` keeps a job whose ``metrics.json`` has status "ok" or
   "incomplete" (a finished simulation: a rerun would give the same result), the
   ``config_hash`` of the job's composed config now, and sound files beside it (the time
@@ -23,7 +27,7 @@ sweep directory. Resuming runs the same sweep again into the same directory:
   edited ``conf/`` file), or never started — runs again, and its progress line says why
   (``· rerun: <why>``): :func:`prepare_rerun` removes its previous outputs
   (``metrics.json`` first, so the directory reads as unfinished from then on) and writes
-  ``.hydra/`` as Hydra would.
+  ``.hydra/`` as Hydra would; it never touches a directory outside the sweep directory.
 - At the end the sweep callback summarises the whole directory as usual: every job, kept
   or rerun, is a row.
 
@@ -129,13 +133,14 @@ def resuming(hydra_cfg) -> bool:
 
 
 # --------------------------------------------------------------------------- launching process
-def check_sweep(config) -> list[str]:
-    """Check that the sweep of ``config`` (the launching process's, before any job runs)
-    can resume the one in its ``hydra.sweep.dir``; the lines to print about it.
+def check_sweep(config) -> None:
+    """Check that the sweep of ``config`` (the launching process's, before anything is
+    created: the guard calls it) can resume the one in its ``hydra.sweep.dir``.
 
-    Raises :class:`ResumeError` when the directory has no ``multirun.yaml`` or when the
-    task overrides or the sweeper's lists (``hydra.sweeper.params``, the presets') differ
-    from the ones the sweep was started with.
+    Raises :class:`ResumeError` when the directory has no ``multirun.yaml``, when the
+    sweeper is not Hydra's basic one, when the task overrides or the sweeper's lists
+    (``hydra.sweeper.params``, the presets') differ from the ones the sweep was started
+    with, or when the Hydra overrides that name the jobs' directories differ.
     """
     from omegaconf import OmegaConf
 
@@ -143,7 +148,21 @@ def check_sweep(config) -> list[str]:
     saved = sweep_dir / MULTIRUN_FILE
     if not saved.is_file():
         raise ResumeError(f"no sweep to resume in {sweep_dir} (it has no multirun.yaml)")
+    sweeper = str(OmegaConf.select(config, "hydra.sweeper._target_", default="") or "")
+    if sweeper and not sweeper.endswith("BasicSweeper"):
+        raise ResumeError(
+            "resume= continues a sweep of Hydra's basic sweeper; a tuning study continues when its "
+            "own command is run again (without resume=)"
+        )
     old = OmegaConf.load(saved)
+    moved = _job_naming(old) != _job_naming(config)
+    if moved:
+        raise ResumeError(
+            f"the sweep in {sweep_dir} named its jobs' directories with\n    {_job_naming(old)}\n"
+            f"  and this command would name them with\n    {_job_naming(config)}\n"
+            "  A resume must keep the sweep's job directories (it reruns a job by emptying its "
+            "directory): repeat the sweep's hydra.sweep.subdir and hydra.job.* overrides, or none."
+        )
     old_task = _as_list(OmegaConf.select(old, "hydra.overrides.task"))
     new_task = _as_list(OmegaConf.select(config, "hydra.overrides.task"))
     if old_task != new_task:
@@ -160,7 +179,40 @@ def check_sweep(config) -> list[str]:
             f"the lists to sweep (hydra.sweeper.params, from a preset) changed since the sweep "
             f"in {sweep_dir} started: {old_params} → {new_params}; start a new sweep"
         )
-    return _status_lines(sweep_dir)
+
+
+#: Hydra overrides that decide where a job writes (its directory's name); a resume keeps them
+JOB_NAMING = ("hydra.sweep.subdir", "hydra.job.")
+
+
+def _job_naming(config) -> list[str]:
+    """The Hydra overrides of ``config`` that name the jobs' directories, in order."""
+    from omegaconf import OmegaConf
+
+    given = _as_list(OmegaConf.select(config, "hydra.overrides.hydra"))
+    return [o for o in given if o.lstrip("+~").startswith(JOB_NAMING)]
+
+
+def foreign_job_dirs(sweep_dir: Path, subdirs: list[str]) -> str | None:
+    """Why a resume whose jobs have the directories ``subdirs`` (relative to ``sweep_dir``)
+    must not run: the sweep holds job directories that are none of them (the jobs would be
+    named otherwise than when the sweep ran, and its summary would mix both); or None."""
+    import os
+
+    mine = {Path(os.path.normpath(sweep_dir / sub)).resolve() for sub in subdirs}
+    foreign = [
+        d for d in find_job_dirs(sweep_dir) if d.resolve() not in mine and d.resolve() != sweep_dir.resolve()
+    ]
+    if not foreign:
+        return None
+    shown = ", ".join(d.name for d in foreign[:3]) + (
+        f", … ({len(foreign)} in all)" if len(foreign) > 3 else ""
+    )
+    return (
+        f"resume={sweep_dir}: the sweep holds job directories that none of this command's jobs would "
+        f"write ({shown}): a resume must name its jobs as the sweep did (the same overrides, the same "
+        "hydra.sweep.subdir); for other jobs start a new sweep."
+    )
 
 
 def _as_list(node) -> list[str]:
@@ -177,7 +229,7 @@ def _as_plain(node):
     return OmegaConf.to_container(node, resolve=False) if OmegaConf.is_config(node) else node
 
 
-def _status_lines(sweep_dir: Path) -> list[str]:
+def status_lines(sweep_dir: Path) -> list[str]:
     """What the resume will find: kept candidates, reruns, and a provenance note."""
     from compliant_docking.run import provenance
 
@@ -252,17 +304,24 @@ def rerun_note(why: str) -> str:
     return f"{RERUN}{why}"
 
 
-def prepare_rerun(cfg, out_dir: Path) -> None:
-    """Clear a job directory for its rerun and write its ``.hydra/`` (when Hydra did not).
+def prepare_rerun(cfg, out_dir: Path, sweep_dir: Path) -> None:
+    """Clear the job directory ``out_dir`` of the sweep in ``sweep_dir`` for its rerun and
+    write its ``.hydra/`` (when Hydra did not).
 
     Removes ``metrics.json`` first, then everything else of the previous attempt except
-    ``.hydra/``: time series, summary, figures, video, temporary files.
+    ``.hydra/``: time series, summary, figures, video, temporary files. Raises
+    RuntimeError, removing nothing, for a directory that is not strictly inside
+    ``sweep_dir`` or that is a sweep directory itself.
     """
     from compliant_docking.run.rundir import METRICS_FILE
 
     out_dir = Path(out_dir)
     if (out_dir / MULTIRUN_FILE).exists():  # a sweep directory, not a job's: keep it
         raise RuntimeError(f"{out_dir} is a sweep directory, not a job directory")
+    if Path(sweep_dir).resolve() not in out_dir.resolve().parents:
+        raise RuntimeError(
+            f"{out_dir} is not inside the sweep directory {sweep_dir}: nothing of it is removed"
+        )
     out_dir.mkdir(parents=True, exist_ok=True)
     (out_dir / METRICS_FILE).unlink(missing_ok=True)
     for entry in out_dir.iterdir():
@@ -294,7 +353,11 @@ def write_hydra_dir(cfg, out_dir: Path) -> None:
         atomic_write_text(folder / name, OmegaConf.to_yaml(node))
 
 
+#: exit status of a refused resume: a refusal, like every refusal of the command line
+EXIT_REFUSED = 1
+
+
 def fail(exc: ResumeError) -> int:
-    """Print a refused resume; the exit status (2: a usage error, nothing ran)."""
+    """Print a refused resume; the exit status (1: refused, nothing ran or was written)."""
     print(f"resume: {exc}", file=sys.stderr)
-    return 2
+    return EXIT_REFUSED

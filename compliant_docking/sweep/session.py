@@ -108,36 +108,44 @@ class SweepSession:
         self, sweep_dir: Path, *, figures: bool, aborted: bool = False, strict: bool = True
     ) -> SweepOutcome:
         """Summarise the sweep (files, console counts) and keep its outcome (``strict``:
-        a failed job makes the exit status 1)."""
+        a failed job makes the exit status 1). A signal that comes meanwhile waits until the
+        summary is written, then stops the command (run/interrupt.py)."""
+        from compliant_docking.run import interrupt
         from compliant_docking.sweep.workers import release_workers
 
-        release_workers()  # every job has returned: the idle workers exit while this summarises
-        self.stop_watcher()
-        self._join_preload()
-        remove_count(Path(sweep_dir))
-        known = self.sweep_dir is not None and Path(sweep_dir) == self.sweep_dir
-        self.outcome = summarise(
-            sweep_dir,
-            figures=figures,
-            aborted=aborted,
-            total=self.total if known else None,
-            started=self.started,
-            independent_jobs=self.independent_jobs,
-            strict=strict,
-        )
-        for hook in self.after_finish:
-            try:
-                hook(self.outcome)
-            except Exception as exc:  # a hook never changes the outcome
-                import sys
+        with interrupt.deferred() as came:
+            release_workers()  # every job has returned: the idle workers exit while this summarises
+            self.stop_watcher()
+            self._join_preload()
+            remove_count(Path(sweep_dir))
+            known = self.sweep_dir is not None and Path(sweep_dir) == self.sweep_dir
+            self.outcome = summarise(
+                sweep_dir,
+                figures=figures,
+                aborted=aborted,
+                total=self.total if known else None,
+                started=self.started,
+                independent_jobs=self.independent_jobs,
+                strict=strict,
+            )
+            for hook in self.after_finish:
+                try:
+                    hook(self.outcome)
+                except Exception as exc:  # a hook never changes the outcome
+                    import sys
 
-                print(f"sweep: {exc}", file=sys.stderr)
+                    print(f"sweep: {exc}", file=sys.stderr)
+        if came:
+            raise interrupt.Stopped(came[0])
         return self.outcome
 
     def discard(self) -> None:
         """The sweep was refused before any job ran (e.g. a tuning set-up that cannot be
-        used): nothing to summarise, neither now nor when the command unwinds."""
+        used): nothing to summarise, neither now nor when the command unwinds, and no count
+        file left behind."""
         self.stop_watcher()
+        if self.sweep_dir is not None:
+            remove_count(self.sweep_dir)
         self.sweep_dir, self.total, self.started = None, None, None
 
     def finish_aborted(self) -> SweepOutcome | None:
@@ -148,6 +156,8 @@ class SweepSession:
             return None
         try:
             return self.finish(self.sweep_dir, figures=False, aborted=True)
+        except KeyboardInterrupt:  # another signal while it was summarised: written, the command stops
+            return self.outcome
         except Exception as exc:  # never mask the original error
             import sys
 

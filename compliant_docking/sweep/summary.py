@@ -36,11 +36,14 @@ class SweepOutcome:
     unfinished: int
     aborted: bool
     summary: dict[str, Path] = field(default_factory=dict)
-    strict: bool = True  # a failed job fails the sweep (false: only an aborted sweep does)
+    strict: bool = True  # a failed job fails the sweep (false: only an aborted one, or all failed)
 
     @property
     def exit_status(self) -> int:
-        return EXIT_FAILED if ((self.failed and self.strict) or self.aborted) else EXIT_OK
+        """1 when the sweep was aborted, when a job failed (``strict``), or when every job
+        failed (also not ``strict``: a tuning study that measured nothing); else 0."""
+        every_job_failed = self.failed > 0 and self.failed == self.jobs + self.unfinished
+        return EXIT_FAILED if ((self.failed and self.strict) or self.aborted or every_job_failed) else EXIT_OK
 
 
 def summarise(
@@ -58,8 +61,8 @@ def summarise(
     ``total``: the jobs the sweep was to run (None: unknown); ``started``: its start
     (``time.perf_counter()``); ``independent_jobs``: the jobs are processes of their own
     that may outlive the launcher (submitit), so an aborted sweep writes no records for
-    them; ``strict``: a failed job makes the exit status 1 (else only an aborted sweep
-    does). Never raises for what it finds on disk; a failure to draw figures is reported
+    them; ``strict``: a failed job makes the exit status 1 (else only an aborted sweep,
+    or one in which every job failed, does). Never raises for what it finds on disk; a failure to draw figures is reported
     and does not change the outcome.
     """
     from compliant_docking.results import counts, scan, write_summary

@@ -19,6 +19,11 @@ Where: ``tracking_uri``, else the environment's ``MLFLOW_TRACKING_URI``, else th
 file store ``runs/mlruns`` (MLflow 3 keeps its file store in maintenance mode and asks for
 ``MLFLOW_ALLOW_FILE_STORE=true``, which this callback sets for that store only).
 Tracking never fails a job or a sweep: a run that cannot be logged prints one line.
+A tracking server that cannot be reached costs seconds, not minutes: the launching
+process asks it once (:func:`unreachable`, :data:`PROBE_TIMEOUT_S`) and turns tracking
+off for the command with one line when it does not answer; MLflow's own HTTP timeout and
+retries are bounded (:data:`HTTP_DEFAULTS`, unless the environment sets them), and a
+process whose logging fails to connect stops trying for its later jobs.
 """
 
 from __future__ import annotations
@@ -53,10 +58,40 @@ SWEEP_FILES = (
     "trials.csv",
 )
 SWEEP_FOLDERS = ("comparison", "tuning", "pareto")
+#: seconds the launching process waits for a tracking server's answer before tracking is off
+PROBE_TIMEOUT_S = 5.0
+#: MLflow's HTTP client settings used unless the environment sets them: its defaults (120 s
+#: per request, 7 retries with doubling back-off) cost about 4 minutes per call to a server
+#: that does not answer
+HTTP_DEFAULTS = {"MLFLOW_HTTP_REQUEST_TIMEOUT": "10", "MLFLOW_HTTP_REQUEST_MAX_RETRIES": "2"}
+#: ``requests``' errors for a server that cannot be reached or does not answer (by name:
+#: requests is MLflow's dependency, not ours)
+CONNECTION_ERRORS = ("ConnectionError", "ConnectTimeout", "ReadTimeout", "Timeout")
+#: tracking URIs this process could not reach (no more attempts for its later jobs)
+_UNREACHABLE: set[str] = set()
 
 
 class TrackingUnavailable(RuntimeError):
     """MLflow is not installed: the message says how to install it."""
+
+
+def unreachable(uri: str) -> str | None:
+    """Why the tracking server at ``uri`` cannot be reached (one request, at most
+    :data:`PROBE_TIMEOUT_S`), or None: it answered (any HTTP status), or ``uri`` is not an
+    HTTP server (a file or database store is checked when it is used)."""
+    import urllib.error
+    import urllib.request
+
+    if not uri.startswith(("http://", "https://")):
+        return None
+    try:
+        with urllib.request.urlopen(f"{uri.rstrip('/')}/health", timeout=PROBE_TIMEOUT_S):
+            return None
+    except urllib.error.HTTPError:  # an answer: the server is there
+        return None
+    except (urllib.error.URLError, OSError, ValueError) as exc:
+        reason = getattr(exc, "reason", exc)
+        return f"{type(reason).__name__}: {reason}" if str(reason) else type(reason).__name__
 
 
 def flatten(node: Any, prefix: str = "") -> dict[str, Any]:
@@ -87,6 +122,7 @@ class MlflowCallback(Callback):
         self.timeseries = bool(timeseries)
         self.uri: str | None = None  # resolved in the launching process, carried to the workers
         self.parent_run_id: str | None = None
+        self.off = False  # the store did not answer: nothing is logged (carried to the workers)
 
     # ------------------------------------------------------------------ the store
     def resolve_uri(self) -> str:
@@ -108,7 +144,22 @@ class MlflowCallback(Callback):
         uri = self.uri or self.resolve_uri()
         if uri.startswith("file:") or "://" not in uri:
             os.environ.setdefault("MLFLOW_ALLOW_FILE_STORE", "true")  # MLflow 3: maintenance mode
+        for name, value in HTTP_DEFAULTS.items():
+            os.environ.setdefault(name, value)
         return MlflowClient(tracking_uri=uri)
+
+    def _reachable(self) -> bool:
+        """Ask the store once (launching process); False, said in one line, when it does not
+        answer: tracking is then off for this command (``self.uri`` None, carried to the jobs)."""
+        why = unreachable(self.uri) if self.uri else None
+        if why is None:
+            return True
+        emit(
+            f"mlflow: tracking off: {self.uri} did not answer within {PROBE_TIMEOUT_S:g} s ({why}); "
+            "the results are in the run directories as always"
+        )
+        self.uri, self.off = None, True
+        return False
 
     def experiment_id(self, client) -> str:
         found = client.get_experiment_by_name(self.experiment)
@@ -125,9 +176,12 @@ class MlflowCallback(Callback):
     # ------------------------------------------------------------------ launching process
     def on_run_start(self, config: DictConfig, **kwargs: Any) -> None:
         self.uri = self.resolve_uri()
+        self._reachable()
 
     def on_multirun_start(self, config: DictConfig, **kwargs: Any) -> None:
         self.uri = self.resolve_uri()
+        if not self._reachable():
+            return
         try:
             client = self.client()
             experiment_id = self.experiment_id(client)
@@ -191,17 +245,25 @@ class MlflowCallback(Callback):
     def on_job_end(self, config: DictConfig, job_return: Any, **kwargs: Any) -> None:
         from compliant_docking.sweep import resume
 
-        if getattr(job_return, "_return_value", None) == resume.SKIPPED:
-            return  # a resumed sweep kept this job: it was logged when it ran
+        if self.off or getattr(job_return, "_return_value", None) == resume.SKIPPED:
+            return  # tracking is off (said once), or a resumed sweep kept this job: logged when it ran
         out_dir = Path(str(config.hydra.runtime.output_dir))
+        uri = self.uri or self.resolve_uri()
+        if uri in _UNREACHABLE:
+            return  # an earlier job of this process said so
         try:
             run_id = self.log_job(out_dir, _task_config(config, job_return))
             if self.parent_run_id is None:  # a single run: say where it went
-                emit(
-                    f"mlflow: run {run_id} of experiment {self.experiment!r} at {self.uri or self.resolve_uri()}"
-                )
+                emit(f"mlflow: run {run_id} of experiment {self.experiment!r} at {uri}")
         except Exception as exc:  # tracking never fails a job
-            emit(f"mlflow: could not log {out_dir.name} ({type(exc).__name__}: {exc})")
+            if _is_connection_error(exc):
+                _UNREACHABLE.add(uri)
+                emit(
+                    f"mlflow: could not log {out_dir.name}: {uri} does not answer ({type(exc).__name__}); "
+                    "no more attempts from this process"
+                )
+            else:
+                emit(f"mlflow: could not log {out_dir.name} ({type(exc).__name__}: {exc})")
 
     def log_job(self, out_dir: Path, cfg: dict) -> str:
         """Log one finished job directory as a run (a child of the sweep's); its id."""
@@ -250,6 +312,17 @@ class MlflowCallback(Callback):
         config_file = out_dir / rundir.HYDRA_DIR / rundir.CONFIG_FILE
         if config_file.is_file():
             client.log_artifact(run_id, str(config_file), "hydra")
+
+
+def _is_connection_error(exc: BaseException) -> bool:
+    """Whether ``exc``, or an error it arose from (MLflow wraps those of ``requests``), says
+    the tracking server could not be reached or did not answer in time."""
+    seen: BaseException | None = exc
+    while seen is not None:
+        if isinstance(seen, (ConnectionError, TimeoutError)) or type(seen).__name__ in CONNECTION_ERRORS:
+            return True
+        seen = seen.__cause__ or seen.__context__
+    return False
 
 
 def _task_config(config: DictConfig, job_return: Any) -> dict:

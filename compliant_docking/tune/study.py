@@ -89,6 +89,42 @@ def open_study(name: str, url: str, sampler, directions: Sequence[Any], definiti
     study = optuna.create_study(
         study_name=name, storage=url, sampler=sampler, directions=directions, load_if_exists=True
     )
+    _check(study, name, url, directions, definition)
+    if study.user_attrs.get("definition") is None:
+        study.set_user_attr("definition", definition)
+    return study
+
+
+class UnreadableStudy(ValueError):
+    """The stored study cannot be read (a corrupt or foreign file); the message says what to do."""
+
+
+def check_stored(name: str, url: str, directions: Sequence[Any], definition: dict) -> None:
+    """Check the study ``name`` stored at ``url``, if there is one, without changing it:
+    :class:`UnreadableStudy` when the storage cannot be read, :class:`StudyMismatch` when it
+    was made with other objective values or another definition. Nothing is created: a
+    SQLite file that does not exist yet is a new study."""
+    import optuna
+
+    path = Path(url.removeprefix("sqlite:///")) if url.startswith("sqlite:///") else None
+    if path is not None and not path.exists():
+        return
+    optuna.logging.set_verbosity(optuna.logging.WARNING)
+    try:
+        storage = optuna.storages.RDBStorage(url, skip_table_creation=True)
+        names = {s.study_name for s in storage.get_all_studies()}
+    except Exception as exc:  # SQLAlchemy's DatabaseError, a newer schema, …
+        first = (str(exc).strip().splitlines() or [type(exc).__name__])[0]
+        where = path if path is not None else url
+        raise UnreadableStudy(
+            f"the study storage {where} cannot be read ({type(exc).__name__}: {first[:200]}): move it "
+            "away to start the study afresh, or give another hydra.sweeper.study_name or hydra.sweep.dir"
+        ) from None
+    if name in names:
+        _check(optuna.load_study(study_name=name, storage=storage), name, url, directions, definition)
+
+
+def _check(study, name: str, url: str, directions: Sequence[Any], definition: dict) -> None:
     stored_dirs = [d.name.lower() for d in study.directions]
     if stored_dirs != [d.lower() for d in directions]:
         raise StudyMismatch(
@@ -96,9 +132,7 @@ def open_study(name: str, url: str, sampler, directions: Sequence[Any], definiti
             f"{len(directions)}: give another hydra.sweeper.study_name (or another sweep directory)"
         )
     stored = study.user_attrs.get("definition")
-    if stored is None:
-        study.set_user_attr("definition", definition)
-    elif stored != definition:
+    if stored is not None and stored != definition:
         changed = sorted(k for k in set(stored) | set(definition) if stored.get(k) != definition.get(k))
         details = "; ".join(f"{k}: {stored.get(k)!r} → {definition.get(k)!r}" for k in changed)
         raise StudyMismatch(
@@ -106,7 +140,6 @@ def open_study(name: str, url: str, sampler, directions: Sequence[Any], definiti
             "must keep its objective, metrics, draws and fixed overrides (its values would not be "
             "comparable); give another hydra.sweeper.study_name for a new study"
         )
-    return study
 
 
 def recover_interrupted(study) -> list[int]:

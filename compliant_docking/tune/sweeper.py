@@ -17,13 +17,14 @@ then calls :meth:`TuningSweeper.sweep` with the command line's task overrides:
    written (:mod:`.outputs`, :mod:`.figures`) and the best trial printed.
 
 The jobs are ordinary runs (the sweep callback prints a line per job and summarises the
-directory at the end). A refused set-up (a search space, objective or stored study that
-cannot be used) prints one paragraph and exits with status 2 before any job runs.
+directory at the end). A set-up that cannot be used (a search space, objective or stored
+study; a search space reaching values a setting does not allow) is refused by the guard
+through :meth:`TuningSweeper.problems` before the sweep directory is created: one
+paragraph each, exit status 1, like every refusal of the command line.
 """
 
 from __future__ import annotations
 
-import sys
 import time
 from collections.abc import Sequence
 from pathlib import Path
@@ -36,8 +37,9 @@ from compliant_docking.sweep.progress import display, emit
 from compliant_docking.tune import objectives, space
 from compliant_docking.tune import study as studies
 
-#: exit status of a refused tuning set-up (a usage error: nothing ran)
-EXIT_REFUSED = 2
+#: search-space corners composed and checked before anything runs; above it, each
+#: parameter's extremes alone (with the others at their lowest)
+MAX_CORNERS = 32
 #: config groups whose overrides do not change what a trial computes (a study resumed
 #: with or without them is the same study)
 NOT_DEFINING = ("tracking",)
@@ -100,8 +102,36 @@ class TuningSweeper(Sweeper):
 
     def _plan(self, arguments: list[str], sweep_dir: Path) -> dict:
         """Everything the loop needs, checked before any job runs; prints the header."""
-        from compliant_docking.extras import MissingExtra, require
         from compliant_docking.run.rundir import MULTIRUN_FILE
+
+        plan = self._definition(arguments)
+        objective, keys, tuned, draws = plan["objective"], plan["keys"], plan["tuned"], plan["draws"]
+        url = studies.storage_url(self.storage, sweep_dir)
+        sweep_dir.mkdir(parents=True, exist_ok=True)
+        study = studies.open_study(self.study_name, url, None, objective.directions, plan["definition"])
+        OmegaConf.save(self.config, sweep_dir / MULTIRUN_FILE)  # once the study is known to fit
+        study.sampler = studies.make_sampler(self.sampler_cfg, tuned, seed_offset=len(study.trials))
+        retried = studies.recover_interrupted(study)
+        done = len(studies.completed(study))
+        description = objective.description.format(
+            force=keys.get("force"), time=keys.get("time"), draws=len(draws)
+        )
+        emit(f"tune: study {self.study_name} in {display(Path(url.removeprefix('sqlite:///')))}")
+        emit(f"  objective {objective.name}: {description}")
+        emit(f"  search space: {', '.join(f'{p.key} {_describe(p.distribution)}' for p in tuned)}")
+        emit(
+            f"  budget {self.n_trials} trials, {self.parallel_trials} at a time "
+            f"({self.parallel_trials * len(draws)} jobs per batch); {done} told earlier"
+            + (f", trials {retried} were interrupted and are asked again" if retried else "")
+        )
+        for note in plan["notes"]:
+            emit(f"  note: {note}")
+        return {**plan, "study": study, "started": time.perf_counter()}
+
+    def _definition(self, arguments: list[str]) -> dict:
+        """The study's set-up from the config and the command's overrides: objective, search
+        space, draws, budget (ValueError naming what cannot be used). Writes nothing."""
+        from compliant_docking.extras import MissingExtra, require
 
         try:
             require("tune", "optuna")
@@ -119,7 +149,7 @@ class TuningSweeper(Sweeper):
         if str(self.sampler_cfg.name) == "grid" and self.n_trials > studies.grid_size(tuned):
             notes.append(f"sampler grid: {studies.grid_size(tuned)} points, so at most that many trials")
             self.n_trials = studies.grid_size(tuned)
-        self._validate(fixed, tuned, draws)
+        studies.make_sampler(self.sampler_cfg, tuned)  # a sampler that cannot be made is refused now
         definition = {
             "objective": objective.name,
             "metrics": keys,
@@ -129,37 +159,100 @@ class TuningSweeper(Sweeper):
             # the order on the command line does not matter, nor does tracking (+tracking=mlflow)
             "fixed": sorted(f for f in fixed if f.lstrip("+").split("=", 1)[0] not in NOT_DEFINING),
         }
-        sweep_dir.mkdir(parents=True, exist_ok=True)
-        OmegaConf.save(self.config, sweep_dir / MULTIRUN_FILE)
-        url = studies.storage_url(self.storage, sweep_dir)
-        study = studies.open_study(self.study_name, url, None, objective.directions, definition)
-        study.sampler = studies.make_sampler(self.sampler_cfg, tuned, seed_offset=len(study.trials))
-        retried = studies.recover_interrupted(study)
-        done = len(studies.completed(study))
-        description = objective.description.format(
-            force=keys.get("force"), time=keys.get("time"), draws=len(draws)
-        )
-        emit(f"tune: study {self.study_name} in {display(Path(url.removeprefix('sqlite:///')))}")
-        emit(f"  objective {objective.name}: {description}")
-        emit(f"  search space: {', '.join(f'{p.key} {_describe(p.distribution)}' for p in tuned)}")
-        emit(
-            f"  budget {self.n_trials} trials, {self.parallel_trials} at a time "
-            f"({self.parallel_trials * len(draws)} jobs per batch); {done} told earlier"
-            + (f", trials {retried} were interrupted and are asked again" if retried else "")
-        )
-        for note in notes:
-            emit(f"  note: {note}")
         return {
-            "study": study,
             "objective": objective,
             "keys": keys,
+            "notes": notes,
             "tuned": tuned,
             "fixed": fixed,
             "draws": draws,
             "definition": definition,
             "distributions": {p.key: p.distribution for p in tuned},
-            "started": time.perf_counter(),
         }
+
+    # ------------------------------------------------------------------ checked before anything exists
+    def problems(self, config: DictConfig) -> list[str]:
+        """Why the study of ``config`` cannot start, one paragraph each ([] when it can): the
+        guard asks before the sweep directory is created (compliant_docking/sweep/guard.py).
+
+        The set-up (search space, draws, objective, sampler, budget); the jobs the search
+        space reaches, composed at its corners and checked as a run checks them, so that a
+        search space outside a setting's allowed range is refused, not 96 failed jobs; and the
+        sweep directory: new, empty, or this study's own, whose stored study must be readable
+        and have this definition (the same command continues it).
+        """
+        self.config = config
+        try:
+            plan = self._definition([str(o) for o in config.hydra.overrides.task])
+        except (ValueError, RuntimeError) as exc:
+            return [_sentence(exc)]
+        return self._corner_problems(plan) or self._directory_problems(
+            plan, Path(str(config.hydra.sweep.dir))
+        )
+
+    def _corner_problems(self, plan: dict) -> list[str]:
+        """The problems of the jobs at the corners of the search space (every combination of
+        each parameter's lowest and highest value, or each extreme alone when there are more
+        than :data:`MAX_CORNERS`), with the first draw; and of every draw at the lowest corner."""
+        import itertools
+
+        from hydra.core.global_hydra import GlobalHydra
+
+        from compliant_docking.config.validate import composition_problem
+        from compliant_docking.sweep.guard import job_problems
+
+        extremes = [(p.key, _extremes(p.distribution)) for p in plan["tuned"]]
+        lowest = {key: values[0] for key, values in extremes}
+        corners = [
+            dict(zip([k for k, _ in extremes], combo))
+            for combo in itertools.product(*(v for _, v in extremes))
+        ]
+        if len(corners) > MAX_CORNERS:
+            corners = [lowest] + [{**lowest, key: v} for key, values in extremes for v in values[1:]]
+        cases = [(corner, 0) for corner in corners] + [(lowest, i) for i in range(1, len(plan["draws"]))]
+        loader = GlobalHydra.instance().config_loader()
+        assert self.config is not None
+        for corner, draw in cases:
+            overrides = self._jobs(0, corner, plan)[draw]
+            try:
+                found = job_problems(loader.load_sweep_config(self.config, overrides))
+            except Exception as exc:  # a key that does not compose
+                found = [composition_problem(exc)]
+            if found:
+                at = " ".join(p.override(corner[p.key]) for p in plan["tuned"])
+                draw_text = " ".join(plan["draws"][draw]) or "the only draw"
+                return [f"{f} [the search space reaches this job: {at}, draw {draw_text}]" for f in found]
+        return []
+
+    def _directory_problems(self, plan: dict, sweep_dir: Path) -> list[str]:
+        """Why ``sweep_dir`` cannot hold this study: it holds something else, or a stored
+        study that cannot be read or was made with another definition."""
+        from compliant_docking.run.rundir import MULTIRUN_FILE
+
+        if sweep_dir.is_dir() and any(sweep_dir.iterdir()):
+            saved = sweep_dir / MULTIRUN_FILE
+            stored_name = None
+            if saved.is_file():
+                try:
+                    stored_name = OmegaConf.select(OmegaConf.load(saved), "hydra.sweeper.study_name")
+                except Exception:
+                    stored_name = None
+            # a study's own directory: its multirun.yaml names it, or (a command stopped just
+            # after it opened the study) it holds the study alone so far
+            started_here = not saved.is_file() and (sweep_dir / studies.STUDY_FILE).is_file()
+            if stored_name != self.study_name and not started_here:
+                return [
+                    f"hydra.sweep.dir={sweep_dir} holds something other than the study "
+                    f"{self.study_name!r} (its {MULTIRUN_FILE} names "
+                    f"{'no study' if stored_name is None else repr(stored_name)}): a study starts in a new "
+                    "or empty directory and continues in its own; choose another directory."
+                ]
+        url = studies.storage_url(self.storage, sweep_dir)
+        try:
+            studies.check_stored(self.study_name, url, plan["objective"].directions, plan["definition"])
+        except (studies.StudyMismatch, studies.UnreadableStudy) as exc:
+            return [_sentence(exc)]
+        return []
 
     def _jobs(self, trial_number: int, params: dict, plan: dict) -> list[list[str]]:
         settings = [p.override(params[p.key]) for p in plan["tuned"]]
@@ -167,17 +260,6 @@ class TuningSweeper(Sweeper):
             [*plan["fixed"], *settings, *draw, f"hydra.sweep.subdir={job_name(trial_number, i)}"]
             for i, draw in enumerate(plan["draws"])
         ]
-
-    def _validate(self, fixed: list[str], tuned: Sequence[space.Param], draws: list[list[str]]) -> None:
-        """Compose one job per draw (lowest values) now: a wrong key fails here, named by Hydra."""
-        from hydra.errors import HydraException
-
-        first = {p.key: _first_value(p.distribution) for p in tuned}
-        plan = {"fixed": fixed, "tuned": tuned, "draws": draws}
-        try:
-            self.validate_batch_is_legal(self._jobs(0, first, plan))
-        except HydraException as exc:
-            raise ValueError(f"a job of this study cannot be composed: {exc}") from None
 
     def _run_batch(self, trials: list, plan: dict, sweep_dir: Path) -> Sequence[Any]:
         """Launch every draw of ``trials``, then tell each trial its value."""
@@ -297,12 +379,33 @@ class TuningSweeper(Sweeper):
         emit("\n".join(lines))
 
     def _refuse(self, exc: Exception) -> None:
-        """Print why the tuning cannot start and exit (status 2); nothing ran."""
+        """Refuse the study (exit status 1, the command line's refusal); nothing ran. The
+        guard asked :meth:`problems` before anything was created: this is for a sweeper used
+        without it (from Python)."""
+        from compliant_docking.sweep.guard import refuse
         from compliant_docking.sweep.session import SweepSession
 
         SweepSession.current().discard()
-        print(f"tune: {exc}", file=sys.stderr)
-        raise SystemExit(EXIT_REFUSED)
+        raise refuse("the tuning study is refused", [_sentence(exc)])
+
+
+def _extremes(distribution) -> list:
+    """The values at the ends of a distribution: every choice of a categorical one, else its
+    lowest and highest value (the last point of a stepped grid)."""
+    from optuna.distributions import CategoricalDistribution
+
+    if isinstance(distribution, CategoricalDistribution):
+        return list(distribution.choices)
+    high = distribution.high
+    step = getattr(distribution, "step", None)
+    if step:
+        high = distribution.low + step * int((distribution.high - distribution.low) // step)
+    return [distribution.low] if high == distribution.low else [distribution.low, high]
+
+
+def _sentence(exc: BaseException) -> str:
+    text = " ".join(str(exc).split())
+    return text if text.endswith(".") else f"{text}."
 
 
 def _plain(node) -> Any:

@@ -22,16 +22,10 @@ from omegaconf.errors import OmegaConfBaseException
 
 from compliant_docking import CONF_DIR
 from compliant_docking.config import env, geometry, schemas
+from compliant_docking.config.memory import BYTES_PER_STEP, memory_problem
 from compliant_docking.config.ranges import Range, field_range, show
 from compliant_docking.config.store import _SCHEMAS, load_env_config
-from compliant_docking.config.validate import (
-    BYTES_PER_STEP,
-    ConfigError,
-    check,
-    memory_problem,
-    settings_problems,
-    validate,
-)
+from compliant_docking.config.validate import ConfigError, check, settings_problems, validate
 from tests.helpers import make_cfg
 
 #: what an option needs beside it to make a config that runs (free-space options)

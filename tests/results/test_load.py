@@ -342,3 +342,22 @@ def test_locate_runs_reads_relative_paths_from_the_working_directory_then_the_ba
         locate_runs("runs/multirun/nope", base=REPO_ROOT)
     with pytest.raises(FileNotFoundError, match="no directory 'assets'"):
         locate_runs("assets")  # without a base: the working directory only
+
+
+def test_a_failed_or_interrupted_job_never_counts_as_docked(tmp_path, capsys):
+    """A record whose status is failed or interrupted but whose ``success`` says true (a
+    hand-edited file, another writer) is read as not docked by every reader: load_runs,
+    the counts and tables, report, the progress line."""
+    from compliant_docking.run.rundir import read_metrics
+    from compliant_docking.sweep.progress import job_line
+
+    fake_job(tmp_path / "0_a", ["controller.k=1"], status="failed", error="diverged", success=True)
+    fake_job(tmp_path / "1_b", ["controller.k=2"], status="interrupted", error="SIGINT", success=True)
+    fake_job(tmp_path / "2_c", ["controller.k=3"])  # finished and docked
+    assert [read_metrics(tmp_path / d)[0]["success"] for d in ("0_a", "1_b", "2_c")] == [False, False, True]
+    df = load_runs(tmp_path)
+    assert df.set_index("job")["success"].to_dict() == {"0_a": False, "1_b": False, "2_c": True}
+    assert counts(df).line() == "3 jobs: 1 finished (1 docked, 0 not docked), 2 failed"
+    assert report.main([str(tmp_path), "--no-figures"]) == 0
+    assert "3 jobs: 1 finished (1 docked, 0 not docked), 2 failed" in capsys.readouterr().out
+    assert "docked" not in job_line(tmp_path / "0_a", tmp_path, 3, done=1).split(" · ")[1:3]

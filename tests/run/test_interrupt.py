@@ -22,39 +22,74 @@ from compliant_docking.run.summary import format_summary
 from compliant_docking.sim import mjlog
 from tests.helpers import REPO_ROOT, make_cfg
 
-
 # --------------------------------------------------------------------------- signals
-@pytest.mark.parametrize(
-    ("signum", "code", "how"), [(signal.SIGINT, 130, "SIGINT (Ctrl-C)"), (signal.SIGTERM, 143, "SIGTERM")]
-)
-def test_a_signalled_single_run_records_itself_as_interrupted(tmp_path, signum, code, how):
-    """Ctrl-C or SIGTERM in the middle of a run: status "interrupted" with the time series
-    so far (one row per simulated step), exit 128 + signal number, no traceback."""
-    run_dir = tmp_path / "run"
+SIGNALS = [
+    (signal.SIGINT, 130, "SIGINT (Ctrl-C)"),
+    (signal.SIGTERM, 143, "SIGTERM"),
+    (signal.SIGHUP, 129, "SIGHUP"),
+]
+
+
+def _start_run(run_dir: Path, *args: str) -> tuple[subprocess.Popen, list[str]]:
+    """A long single run in a subprocess, its stderr on a pseudo-terminal (where the loop
+    prints its progress: the marker that it runs); the pieces of stderr as they come."""
+    import pty
+
+    main_fd, child_fd = pty.openpty()
     proc = subprocess.Popen(
         [
             sys.executable,
             "-m",
             "compliant_docking",
-            "trajectory.duration=200",  # far longer than the test waits
-            "task.progress=false",
+            "trajectory.duration=200",
+            *args,
             f"hydra.run.dir={run_dir}",
         ],
         cwd=REPO_ROOT,
         stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
+        stderr=child_fd,
         text=True,
         env={**os.environ, "PYTHONUNBUFFERED": "1"},
     )
-    deadline = time.monotonic() + 120
-    while not (run_dir / ".hydra").is_dir():
-        assert time.monotonic() < deadline and proc.poll() is None, proc.communicate()
-        time.sleep(0.1)
-    time.sleep(4.0)  # the scene is built within about 1 s; then it simulates
+    os.close(child_fd)
+    err: list[str] = []
+
+    def read() -> None:
+        while True:
+            try:
+                chunk = os.read(main_fd, 4096)
+            except OSError:  # the run ended: the terminal is closed
+                break
+            if not chunk:
+                break
+            err.append(chunk.decode(errors="replace"))
+        os.close(main_fd)
+
+    threading.Thread(target=read, daemon=True).start()
+    return proc, err
+
+
+def _wait(proc: subprocess.Popen, ready, what: str) -> None:
+    deadline = time.monotonic() + 180
+    while not ready():
+        assert proc.poll() is None, f"the run ended before {what}"
+        assert time.monotonic() < deadline, f"no {what} within 180 s"
+        time.sleep(0.01)
+
+
+@pytest.mark.parametrize(("signum", "code", "how"), SIGNALS)
+def test_a_signalled_single_run_records_itself_as_interrupted(tmp_path, signum, code, how):
+    """A signal in the middle of a run (once it prints its progress: the loop runs): status
+    "interrupted" with the time series so far (one row per simulated step), exit 128 +
+    signal number, no traceback."""
+    run_dir = tmp_path / "run"
+    proc, err = _start_run(run_dir, "task.progress=true")
+    _wait(proc, lambda: "simulating" in "".join(err), "the loop's progress")
     proc.send_signal(signum)
-    out, err = proc.communicate(timeout=120)
-    assert proc.returncode == code, err[-3000:]
-    assert "Traceback" not in err and "KeyboardInterrupt" not in err
+    out, _ = proc.communicate(timeout=120)
+    text = "".join(err)
+    assert proc.returncode == code, text[-3000:]
+    assert "Traceback" not in text and "KeyboardInterrupt" not in text
     record = json.loads((run_dir / "metrics.json").read_text())
     assert record["status"] == "interrupted" and record["success"] is False
     assert record["error"].startswith(f"interrupted by {how} at t = ")
@@ -65,6 +100,50 @@ def test_a_signalled_single_run_records_itself_as_interrupted(tmp_path, signum, 
     assert series.notna().all().all()
     assert record["sim_time_s"] == pytest.approx(record["steps"] * 0.001)
     assert "status interrupted" in out and "INTERRUPTED" in (run_dir / "summary.txt").read_text()
+
+
+@pytest.mark.parametrize(("signum", "code", "how"), SIGNALS)
+def test_a_signal_as_the_run_directory_appears_is_recorded(tmp_path, signum, code, how):
+    """The moment the run's directory is claimed, before the loop (Hydra writes .hydra/, the
+    libraries load): before, SIGINT left the directory without a record and SIGTERM ended
+    with an ImportError traceback ("partially initialized module")."""
+    run_dir = tmp_path / "run"
+    proc, err = _start_run(run_dir, "task.progress=false")
+    _wait(proc, run_dir.exists, "a run directory")
+    proc.send_signal(signum)
+    proc.communicate(timeout=120)
+    text = "".join(err)
+    assert proc.returncode == code, text[-3000:]
+    assert "Traceback" not in text and "Error" not in text
+    record = json.loads((run_dir / "metrics.json").read_text())
+    assert record["status"] == "interrupted" and record["error"].startswith(f"interrupted by {how}")
+    assert (run_dir / "summary.txt").is_file()
+
+
+def test_a_signal_while_the_record_is_written_waits_for_it(tmp_path, monkeypatch):
+    """A signal while the run's record is written: the record is finished first, whole, then
+    the run stops with that signal."""
+    from compliant_docking.run.interrupt import Stopped
+
+    write = rundir.write_summary_text
+
+    def signalled_write(*args, **kwargs):
+        os.kill(os.getpid(), signal.SIGTERM)  # delivered now, in the middle of the writing
+        return write(*args, **kwargs)
+
+    monkeypatch.setattr(rundir, "write_summary_text", signalled_write)
+    cfg = make_cfg(
+        "trajectory.duration=0.3", "task.settle_time=0.2", "task.press_duration=0.1", "task.progress=false"
+    )
+    previous = signal.signal(signal.SIGTERM, lambda signum, frame: (_ for _ in ()).throw(Stopped(signum)))
+    try:
+        with pytest.raises(Stopped) as stopped:
+            execute(cfg, tmp_path, figures=False, echo=False)
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+    assert stopped.value.signum == signal.SIGTERM
+    record = json.loads((tmp_path / "metrics.json").read_text())
+    assert record["status"] == "ok" and (tmp_path / "summary.txt").is_file()  # the finished run's record
 
 
 def test_an_interrupted_run_in_python_is_recorded_then_raised(tmp_path):
@@ -162,3 +241,44 @@ def test_concurrent_writers_of_one_file_never_collide(tmp_path):
     assert not errors
     assert sorted(p.name for p in tmp_path.iterdir()) == ["figures", "summary.txt"]  # no leftovers
     assert (target / "a.png").stat().st_size == 1008
+
+
+@pytest.mark.parametrize(
+    ("command", "patched", "signum"),
+    [
+        ("report", "compliant_docking.results.report.scan", signal.SIGTERM),
+        ("findings", "compliant_docking.results.findings.load_runs", signal.SIGINT),
+        ("interface", "compliant_docking.interface.convert", signal.SIGHUP),
+    ],
+)
+def test_the_other_commands_stop_on_a_signal_in_one_line(
+    tmp_path, monkeypatch, capsys, command, patched, signum
+):
+    """report, findings and interface: a signal ends them like the simulation's command (one
+    line, 128 + signal number), not with a KeyboardInterrupt traceback."""
+    import importlib
+
+    def signalled(*args, **kwargs):
+        os.kill(os.getpid(), signum)
+        time.sleep(5)  # the handler raises before this ends
+        raise AssertionError("the signal was not acted on")
+
+    monkeypatch.setattr(patched, signalled)
+    main = importlib.import_module(
+        {"report": "compliant_docking.results.report", "findings": "compliant_docking.results.findings",
+         "interface": "compliant_docking.interface"}[command]
+    ).main  # fmt: skip
+    cad = REPO_ROOT / "assets" / "interfaces" / "keyed_cad" / "cad"
+    argv = {
+        "report": [str(tmp_path)],
+        "findings": [str(tmp_path)],
+        "interface": [str(cad / "plug.stl"), str(cad / "socket.stl"), "--out", str(tmp_path / "out")],
+    }[command]
+    handlers = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)}
+    assert main(argv) == 128 + signum
+    err = capsys.readouterr().err
+    assert err.strip().endswith(
+        f"{command}: stopped by {'SIGINT (Ctrl-C)' if signum == signal.SIGINT else signum.name}"
+    )
+    assert "Traceback" not in err
+    assert {s: signal.getsignal(s) for s in handlers} == handlers  # put back

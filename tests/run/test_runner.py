@@ -117,7 +117,7 @@ def test_fragment_files_are_checked(tmp_path):
         (f"tool.mjcf={no_dock}", "no body named 'dock'"),
         (f"tool.mjcf={no_sensor}", "no site named 'sensor_site'"),
         (f"target.mjcf={no_dock}", "no body named 'dock'"),
-        (f"tool.mjcf={tmp_path / 'missing.xml'}", "no such file"),
+        (f"tool.mjcf={tmp_path / 'missing.xml'}", "tool.mjcf must name an MJCF file; there is no such file"),
     ]
     for override, message in cases:
         record = execute(make_cfg(override), tmp_path / "run", echo=False)

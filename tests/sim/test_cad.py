@@ -368,3 +368,44 @@ def test_example_converts_from_scratch_with_the_defaults(tmp_path):
     )
     assert record["success"] is True, record["gate_failures"]
     assert math.isfinite(record["seat_key_yaw_deg"])
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (("--plug-mass", "nan"), "error: --plug-mass: plug_mass must be a finite number > 0 kg; got nan."),
+        (("--plug-mass", "-0.3"), "error: --plug-mass: plug_mass must be a finite number > 0 kg; got -0.3."),
+        (("--density", "inf"), "error: --density: density must be a finite number > 0 kg/m³; got inf."),
+        (("--threshold", "nan"), "error: --threshold: threshold must be a finite number in (0, 1]; got nan."),
+        (("--lift-mm", "inf"), "error: --lift-mm: lift must be a finite number >= 0 m; got inf."),
+        (("--keep", "0"), "error: --keep: keep must be a finite number in (0, 1]; got 0.0."),
+        (("--max-pieces", "0"), "error: --max-pieces: max_pieces must be -1 (no cap) or at least 1; got 0."),
+        (("--symmetry", "-1"), "error: --symmetry: symmetry must be an integer >= 0; got -1."),
+        (("--margin-mm", "nan"), "error: --margin-mm: margin must be a length > 0 [m]; got nan."),
+        (("--bevel-deg", "45"), "error: --bevel-deg: bevel_deg must be in (0, 45) [deg]; got 45.0."),
+        (
+            ("--audit-tolerance-deg", "inf"),
+            "error: --audit-tolerance-deg: audit_tolerance_deg must be a finite number in (0, 90) deg; got inf.",
+        ),
+    ],
+)
+def test_command_line_refuses_an_unusable_option_before_writing(tmp_path, capsys, args, message):
+    """Every numeric option is checked (finite, in its range) before any file is read or
+    written: the fragments of a NaN plug mass would not load in MuJoCo."""
+    argv = [
+        str(EXAMPLE / "cad" / "plug.stl"),
+        str(EXAMPLE / "cad" / "socket.stl"),
+        "--out",
+        str(tmp_path / "out"),
+    ]
+    assert main([*argv, "--symmetry", "4", *args]) == 1
+    err = capsys.readouterr().err
+    assert message in err and "Traceback" not in err
+    assert not (tmp_path / "out").exists()
+
+
+def test_export_refuses_a_keyed_plug_outside_its_range(tmp_path, capsys):
+    assert main(["--export-keyed", str(tmp_path / "cad"), "--sides", "2"]) == 1
+    err = capsys.readouterr().err
+    assert err.startswith("error: --sides: ") and "sides must be an integer in [3, 12]; got 2" in err
+    assert not (tmp_path / "cad").exists()

@@ -18,6 +18,7 @@ from compliant_docking import CONF_DIR
 from compliant_docking.config import register_schemas
 from compliant_docking.sweep.callback import expected_jobs
 from compliant_docking.sweep.progress import COUNT_FILE, job_line, next_count, remove_count, reset_count
+from compliant_docking.sweep.session import SweepSession
 from compliant_docking.sweep.summary import ORPHAN_ERROR, SweepOutcome
 from tests.helpers import SHORT_SWEEP as SHORT
 from tests.helpers import TESTS, sweep_cli
@@ -189,6 +190,7 @@ def test_expected_jobs_counts_what_hydras_basic_sweeper_launches(overrides):
 def test_job_line_and_exit_status(tmp_path):
     job = tmp_path / "sweep" / "3_controller=hqp"
     job.mkdir(parents=True)
+    reset_count(tmp_path / "sweep")  # the sweep has started: its count file exists
     (job / "metrics.json").write_text(
         json.dumps(
             {
@@ -221,6 +223,16 @@ def test_job_line_and_exit_status(tmp_path):
     assert SweepOutcome(failed=0, aborted=False, **outcome).exit_status == 0  # not docked ≠ failed
     assert SweepOutcome(failed=1, aborted=False, **outcome).exit_status == 1
     assert SweepOutcome(failed=0, aborted=True, **outcome).exit_status == 1
+
+
+def test_a_lenient_sweep_in_which_every_job_failed_exits_1(tmp_path):
+    """strict=false (the tuning presets): a failed job is a penalised result, but a study
+    in which every job failed measured nothing (before: exit 0)."""
+    outcome = dict(sweep_dir=tmp_path, docked=0, summary={}, aborted=False, strict=False)
+    assert SweepOutcome(jobs=4, ok=3, failed=1, unfinished=0, **outcome).exit_status == 0
+    assert SweepOutcome(jobs=4, ok=0, failed=4, unfinished=0, **outcome).exit_status == 1
+    assert SweepOutcome(jobs=2, ok=0, failed=4, unfinished=2, **outcome).exit_status == 1  # 2 left no record
+    assert SweepOutcome(jobs=0, ok=0, failed=0, unfinished=0, **outcome).exit_status == 0  # nothing to run
 
 
 def _count(sweep_dir: str, times: int) -> list[int | None]:
@@ -264,3 +276,17 @@ def test_the_expected_jobs_of_a_tuning_study_are_trials_times_draws():
             return_hydra_config=True,
         )
     assert expected_jobs(cfg) == 5 * 4 * 3  # seeds 0-3 of the preset × the 3 values added
+
+
+def test_the_count_file_is_never_left_behind(tmp_path):
+    """A sweep refused after it began (a tuning set-up refused by the sweeper itself), and a
+    job that finishes after its sweep was summarised (an aborted one's), leave no
+    .finished_jobs in the sweep directory."""
+    session = SweepSession()
+    session.begin(tmp_path, 4, independent_jobs=False)
+    assert (tmp_path / COUNT_FILE).is_file()
+    session.discard()
+    assert not (tmp_path / COUNT_FILE).exists()
+    reset_count(tmp_path)
+    remove_count(tmp_path)  # the sweep was summarised
+    assert next_count(tmp_path) is None and not (tmp_path / COUNT_FILE).exists()

@@ -16,21 +16,11 @@ import psutil
 import pytest
 from omegaconf import OmegaConf
 
-from compliant_docking.cli import main
-from compliant_docking.sweep import guard
-from tests.helpers import REPO_ROOT, SHORT_SWEEP
+from compliant_docking.sweep import directories
+from tests.helpers import REPO_ROOT, SHORT_SWEEP, cli_in_process
 
 #: short single runs: 1 s of motion, 1 s of settling
 SHORT_RUN = ("trajectory.duration=1", "task.settle_time=1", "task.progress=false")
-
-
-def _main(capsys, *args: str) -> tuple[int, str]:
-    """``python -m compliant_docking args…`` in this process: (exit status, stderr)."""
-    try:
-        code = main(list(args))
-    except SystemExit as exc:
-        code = exc.code if isinstance(exc.code, int) else 1
-    return code, capsys.readouterr().err
 
 
 # --------------------------------------------------------------------------- refused up front
@@ -76,12 +66,58 @@ def test_a_bad_input_is_refused_before_a_run_directory_is_written(
     monkeypatch.chdir(tmp_path)  # the default run directory: runs/<date>/<time>_…
     monkeypatch.delenv("DISPLAY", raising=False)
     monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
-    code, err = _main(capsys, *args, *SHORT_RUN)
+    code, err = cli_in_process(capsys, *args, *SHORT_RUN)
     assert code == 1
     assert message in err
     assert err.startswith("compliant-docking: the configuration is refused; nothing was run or written.")
     assert "Traceback" not in err and "n/a" not in err
     assert "Config" not in err.replace("configuration", "")  # config keys, never schema classes
+    assert not (tmp_path / "runs").exists()
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (
+            ("trajectory=twophase", "trajectory.v_max_docking=1e-9"),  # a planner's duration: 1.9e8 s
+            "its logs would need about",
+        ),
+        (
+            tuple(f"robot.{k}=[1,1,1,1,1,1]" for k in ("velocity_limits", "torque_limits", "max_torque"))
+            + ("robot.ik_guess=[0,0.5,0,-1.6,0,1]",),
+            "robot.velocity_limits has 6 values; robot iiwa14 has 7 joints: give one value per joint.",
+        ),
+        (("trajectory=tracking",), "trajectory=tracking is a free-space test and must not touch the docking"),
+        (
+            ("target=none", "trajectory=twophase", "task.init_pos=[0.55,0,0.35]"),
+            "trajectory=twophase needs a goal (a target)",
+        ),
+        (("tool.mjcf=no/such/tool.xml",), "tool.mjcf must name an MJCF file; there is no such file "),
+        (("tool.mjcf=assets/iiwa14/iiwa14.xml",), "iiwa14.xml: no body named 'dock'. A tool fragment must"),
+        (("target.mjcf=no/such/target.xml",), "target.mjcf must name an MJCF file; there is no such file "),
+        (("robot.mjcf=no/such/robot.xml",), "robot.mjcf must name an MJCF file; there is no such file "),
+        (
+            ("robot.ee_site=flange",),
+            "robot.ee_site must be a site of robot.mjcf (attachment_site); got 'flange'.",
+        ),
+        (
+            ("controller=hqp", "controller.eps_abs=5"),
+            "robot.max_torque must exceed 4·controller.eps_abs = 20 N·m for every joint",
+        ),
+    ],
+)
+def test_what_only_the_robot_the_planner_or_the_files_tell_is_refused_up_front(
+    tmp_path, monkeypatch, capsys, args, message
+):
+    """A job the run would refuse once its scene and planner exist is refused before its
+    directory does: the planner's own checks and its duration (the memory of the run),
+    per-joint lists against the robot's joints, the files the run loads."""
+    monkeypatch.chdir(tmp_path)
+    code, err = cli_in_process(capsys, *args, "task.progress=false")
+    assert code == 1
+    assert message in err
+    assert err.startswith("compliant-docking: the configuration is refused; nothing was run or written.")
+    assert "Traceback" not in err
     assert not (tmp_path / "runs").exists()
 
 
@@ -106,7 +142,7 @@ def test_a_bad_input_is_refused_before_a_run_directory_is_written(
 )
 def test_a_bad_sweep_is_refused_before_anything_is_created(tmp_path, monkeypatch, capsys, args, message):
     monkeypatch.chdir(tmp_path)
-    code, err = _main(capsys, "-m", *args, *SHORT_SWEEP)
+    code, err = cli_in_process(capsys, "-m", *args, *SHORT_SWEEP)
     assert code == 1
     assert message in err
     assert err.startswith("compliant-docking: the sweep is refused; nothing was run or written.")
@@ -114,21 +150,61 @@ def test_a_bad_sweep_is_refused_before_anything_is_created(tmp_path, monkeypatch
     assert not (tmp_path / "runs").exists()
 
 
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (("trajectory=hold,tracking",), "trajectory=tracking is a free-space test"),
+        (
+            ("trajectory=twophase", "trajectory.v_max_docking=0.02,1e-9"),
+            "its logs would need about",
+        ),
+    ],
+)
+def test_a_sweep_whose_planner_refuses_a_job_is_refused_up_front(
+    tmp_path, monkeypatch, capsys, args, message
+):
+    monkeypatch.chdir(tmp_path)
+    code, err = cli_in_process(capsys, "-m", *args, "task.progress=false")
+    assert code == 1 and message in err and "[job 1: " in err
+    assert err.startswith("compliant-docking: the sweep is refused; nothing was run or written.")
+    assert not (tmp_path / "runs").exists()
+
+
+def test_a_slurm_sweep_without_slurm_is_refused_before_anything_is_created(tmp_path, monkeypatch, capsys):
+    """hydra/launcher=submitit_slurm on a machine without sbatch: before, the sweep directory
+    and an empty "aborted" summary were written and the command exited 0."""
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("PATH", str(tmp_path / "no_slurm_here"))  # no sbatch (nor srun) to find
+    code, err = cli_in_process(
+        capsys, "-m", "controller.k=50,60", "hydra/launcher=submitit_slurm", *SHORT_SWEEP
+    )
+    assert code == 1
+    assert err.startswith("compliant-docking: the sweep is refused; nothing was run or written.")
+    assert "hydra/launcher=submitit_slurm needs Slurm, and this machine has no sbatch on its PATH" in err
+    assert not (tmp_path / "runs").exists()
+
+
 def test_an_unwritable_directory_is_refused_before_anything_runs(tmp_path, monkeypatch, capsys):
     monkeypatch.chdir(tmp_path)
     blocker = tmp_path / "a_file"
     blocker.write_text("")
-    code, err = _main(capsys, "-m", "controller.k=40,50", f"hydra.sweep.dir={blocker}/sweep", *SHORT_SWEEP)
+    code, err = cli_in_process(
+        capsys, "-m", "controller.k=40,50", f"hydra.sweep.dir={blocker}/sweep", *SHORT_SWEEP
+    )
     assert code == 1 and f"hydra.sweep.dir={blocker}/sweep: {blocker} is not a directory" in err
     assert "resume" not in err
-    code, err = _main(capsys, "-m", "controller.k=40,50", "hydra.sweep.dir=/proc/sweep", *SHORT_SWEEP)
+    code, err = cli_in_process(
+        capsys, "-m", "controller.k=40,50", "hydra.sweep.dir=/proc/sweep", *SHORT_SWEEP
+    )
     assert code == 1 and "hydra.sweep.dir=/proc/sweep: cannot write in /proc" in err
-    code, err = _main(capsys, "hydra.run.dir=/proc/run", *SHORT_RUN)
+    code, err = cli_in_process(capsys, "hydra.run.dir=/proc/run", *SHORT_RUN)
     assert code == 1 and "hydra.run.dir=/proc/run: cannot write in /proc" in err
     if os.geteuid() != 0:  # permission bits bind everyone but root
         locked = tmp_path / "locked"
         locked.mkdir(mode=0o555)
-        code, err = _main(capsys, "-m", "controller.k=40,50", f"hydra.sweep.dir={locked}/sweep", *SHORT_SWEEP)
+        code, err = cli_in_process(
+            capsys, "-m", "controller.k=40,50", f"hydra.sweep.dir={locked}/sweep", *SHORT_SWEEP
+        )
         assert code == 1 and "cannot write in" in err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a_file"] + (["locked"] if os.geteuid() else [])
 
@@ -137,15 +213,15 @@ def test_an_unwritable_directory_is_refused_before_anything_runs(tmp_path, monke
 def test_a_taken_default_name_gets_the_next_free_one(tmp_path):
     run_dir = tmp_path / "runs" / "14-03-12_iiwa14_impedance_quintic"
     cfg = OmegaConf.create({"hydra": {"run": {"dir": str(run_dir)}, "overrides": {"hydra": []}}})
-    assert guard.claim(cfg, "run") is None and run_dir.is_dir()
-    assert guard.claim(cfg, "run") is None and cfg.hydra.run.dir == f"{run_dir}_2"
+    assert directories.claim(cfg, "run") is None and run_dir.is_dir()
+    assert directories.claim(cfg, "run") is None and cfg.hydra.run.dir == f"{run_dir}_2"
     sweep = OmegaConf.create({"hydra": {"sweep": {"dir": str(run_dir)}, "overrides": {"hydra": []}}})
-    assert guard.claim(sweep, "sweep") is None and sweep.hydra.sweep.dir == f"{run_dir}_3"
+    assert directories.claim(sweep, "sweep") is None and sweep.hydra.sweep.dir == f"{run_dir}_3"
     assert list(sweep.hydra.overrides.hydra) == [f"hydra.sweep.dir={run_dir}_3"]  # for the jobs
     explicit = OmegaConf.create(
         {"hydra": {"run": {"dir": str(run_dir)}, "overrides": {"hydra": [f"hydra.run.dir={run_dir}"]}}}
     )
-    assert guard.claim(explicit, "run") is None and explicit.hydra.run.dir == str(run_dir)  # as given
+    assert directories.claim(explicit, "run") is None and explicit.hydra.run.dir == str(run_dir)  # as given
 
 
 def test_a_claimed_directory_that_stayed_empty_is_released(tmp_path):
@@ -153,10 +229,10 @@ def test_a_claimed_directory_that_stayed_empty_is_released(tmp_path):
     empty, used = tmp_path / "empty", tmp_path / "used"
     for path in (empty, used):
         cfg = OmegaConf.create({"hydra": {"sweep": {"dir": str(path)}, "overrides": {"hydra": []}}})
-        assert guard.claim(cfg, "sweep") is None
+        assert directories.claim(cfg, "sweep") is None
     (used / "multirun.yaml").write_text("hydra: {}\n")
-    guard.release_empty()
-    assert not empty.exists() and (used / "multirun.yaml").is_file() and not guard.CLAIMED
+    directories.release_empty()
+    assert not empty.exists() and (used / "multirun.yaml").is_file() and not directories.CLAIMED
 
 
 def _block_the_next_minute(root: Path, pattern: str) -> set[Path]:
@@ -224,6 +300,19 @@ def test_two_sweeps_started_together_each_get_their_own_directory(tmp_path):
 
 
 # --------------------------------------------------------------------------- orphans
+def _loky_workers(pid: int) -> list[psutil.Process]:
+    """The loky workers among the descendants of ``pid``; a process that ends while it is
+    looked at (a zombie, gone: e.g. a job's short-lived ``git``) is not one of them."""
+    found = []
+    for p in psutil.Process(pid).children(recursive=True):
+        try:
+            if "popen_loky_posix" in " ".join(p.cmdline()):
+                found.append(p)
+        except (psutil.ZombieProcess, psutil.NoSuchProcess, psutil.AccessDenied):
+            continue
+    return found
+
+
 def test_the_workers_of_a_killed_sweep_exit_within_a_minute(tmp_path):
     """SIGKILL of the launching process leaves its joblib workers without a parent: their
     watchdog ends them (measured: about 1 s) instead of loky's 300 s idle timeout or, as
@@ -250,11 +339,7 @@ def test_the_workers_of_a_killed_sweep_exit_within_a_minute(tmp_path):
     try:
         deadline = time.monotonic() + 120
         while time.monotonic() < deadline:  # both workers started and running a job
-            workers = [
-                p
-                for p in psutil.Process(proc.pid).children(recursive=True)
-                if "popen_loky_posix" in " ".join(p.cmdline())
-            ]
+            workers = _loky_workers(proc.pid)
             if len(workers) == 2 and len(list((tmp_path / "sweep").glob("*/.hydra"))) >= 2:
                 break
             time.sleep(0.2)

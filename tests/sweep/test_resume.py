@@ -261,7 +261,7 @@ def test_a_resume_with_other_overrides_is_refused_and_touches_nothing(killed):
         for a in sweep_command(killed.sweep_dir, f"resume={killed.sweep_dir}")
     ]
     result = subprocess.run(other, cwd=REPO_ROOT, capture_output=True, text=True, timeout=300, env=_env())
-    assert result.returncode == 2
+    assert result.returncode == 1  # refused, like every refusal of the command line
     assert "was started with the overrides" in result.stderr
     assert (saved.stat().st_mtime_ns, saved.read_bytes()) == before
 
@@ -313,8 +313,8 @@ def test_check_sweep_compares_the_overrides_with_multirun_yaml(tmp_path):
         }
     }
     OmegaConf.save(OmegaConf.create(saved), tmp_path / "multirun.yaml")
-    lines = resume.check_sweep(OmegaConf.create(saved))
-    assert lines[0].startswith("resume: 0 finished jobs")
+    resume.check_sweep(OmegaConf.create(saved))  # the same command: no refusal
+    assert resume.status_lines(tmp_path)[0].startswith("resume: 0 finished jobs")
     swapped = {
         **saved,
         "hydra": {**saved["hydra"], "overrides": {"task": ["controller=hqp", "robot=iiwa14,fr3"]}},
@@ -362,12 +362,26 @@ def test_prepare_rerun_clears_the_previous_attempt_but_keeps_hydra(tmp_path):
     (job / "figures").mkdir()
     for name in ("metrics.json", "timeseries.parquet", "summary.txt", ".metrics.json.tmp", "figures/x.png"):
         (job / name).write_text("old")
-    resume.prepare_rerun(make_cfg(), job)  # not under Hydra: .hydra/ is left as it is
+    resume.prepare_rerun(make_cfg(), job, tmp_path / "sweep")  # not under Hydra: .hydra/ as it is
     assert sorted(p.name for p in job.iterdir()) == [".hydra"]
     assert (job / ".hydra" / "config.yaml").read_text() == "a: 1\n"
     (tmp_path / "sweep" / "multirun.yaml").write_text("hydra: {}\n")
     with pytest.raises(RuntimeError, match="sweep directory"):
-        resume.prepare_rerun(make_cfg(), tmp_path / "sweep")
+        resume.prepare_rerun(make_cfg(), tmp_path / "sweep", tmp_path / "sweep")
+
+
+@pytest.mark.parametrize("where", ["outside", "parent", "itself"])
+def test_prepare_rerun_never_clears_a_directory_outside_its_sweep(tmp_path, where):
+    """The last line of defence (the guard refuses such job directories up front): a job
+    directory that is not strictly inside the sweep directory is never emptied."""
+    sweep = tmp_path / "runs" / "sweep"
+    sweep.mkdir(parents=True)
+    victim = {"outside": tmp_path / "precious", "parent": tmp_path / "runs", "itself": sweep}[where]
+    victim.mkdir(exist_ok=True)
+    (victim / "data.txt").write_text("keep me")
+    with pytest.raises(RuntimeError, match="not inside the sweep directory"):
+        resume.prepare_rerun(make_cfg(), victim, sweep)
+    assert (victim / "data.txt").read_text() == "keep me"
 
 
 def test_orphan_records_are_marked_and_never_replace_a_result(tmp_path):

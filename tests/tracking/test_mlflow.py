@@ -124,3 +124,103 @@ def test_tracking_that_cannot_log_says_so_and_never_fails_the_job(tmp_path, monk
     out = capsys.readouterr().out
     assert "mlflow: could not log 14-03-12_fr3_impedance_quintic" in out
     assert "pip install -e '.[tracking]'" in out
+
+
+# --------------------------------------------------------------------------- unreachable servers
+class _Server:
+    """A local TCP server that accepts connections and never answers (or, for a request
+    for /health, answers 404): counts the connections it got."""
+
+    def __init__(self, health: bool = False) -> None:
+        import socket
+        import threading
+
+        self.sock = socket.socket()
+        self.sock.bind(("127.0.0.1", 0))
+        self.sock.listen(16)
+        self.uri = f"http://127.0.0.1:{self.sock.getsockname()[1]}"
+        self.health, self.requests, self.held = health, [], []
+        threading.Thread(target=self._serve, daemon=True).start()
+
+    def _serve(self) -> None:
+        while True:
+            try:
+                conn, _ = self.sock.accept()
+            except OSError:
+                return
+            first = conn.recv(4096).decode(errors="replace").split("\r\n", 1)[0]
+            self.requests.append(first)
+            if self.health and " /health " in first:
+                conn.sendall(b"HTTP/1.1 404 Not Found\r\nContent-Length: 0\r\nConnection: close\r\n\r\n")
+                conn.close()
+            else:
+                self.held.append(conn)  # never answered
+
+    def close(self) -> None:
+        self.sock.close()
+        for conn in self.held:
+            conn.close()
+
+
+def _refusing_uri() -> str:
+    import socket
+
+    with socket.socket() as sock:  # a port nobody listens on once closed: connections are refused
+        sock.bind(("127.0.0.1", 0))
+        return f"http://127.0.0.1:{sock.getsockname()[1]}"
+
+
+@pytest.mark.parametrize("kind", ["refused", "silent"])
+def test_an_unreachable_server_turns_tracking_off_with_one_line(tmp_path, monkeypatch, capsys, kind):
+    """A port that refuses, or a server that never answers: one line when the command starts,
+    nothing logged, nothing waited for later (MLflow's own retries took ~4 minutes per call),
+    the job's files as they were."""
+    from compliant_docking.tracking import mlflow_callback
+
+    monkeypatch.setattr(mlflow_callback, "PROBE_TIMEOUT_S", 0.5, raising=False)
+    server = _Server() if kind == "silent" else None
+    uri = server.uri if server else _refusing_uri()
+    try:
+        job, config, _ = job_dir(tmp_path)
+        before = {p.name: p.read_bytes() for p in job.iterdir() if p.is_file()}
+        single = MlflowCallback("x", tracking_uri=uri, artifacts=True, timeseries=False)
+        single.on_run_start(config)
+        single.on_job_end(config, job_return=None)
+        sweep = MlflowCallback("x", tracking_uri=uri, artifacts=True, timeseries=False)
+        sweep_config = OmegaConf.create(
+            {"hydra": {"sweep": {"dir": str(tmp_path)}, "overrides": {"task": []}}}
+        )
+        sweep.on_multirun_start(sweep_config)
+        sweep.on_job_end(config, job_return=None)
+        out = capsys.readouterr().out.splitlines()
+        assert len(out) == 2  # one line per command (the single run's, the sweep's), none per job
+        for line in out:
+            assert line.startswith(f"mlflow: tracking off: {uri} did not answer within 0.5 s (")
+            assert line.endswith("the results are in the run directories as always")
+        assert {p.name: p.read_bytes() for p in job.iterdir() if p.is_file()} == before
+        if server:
+            assert len(server.requests) == 2  # one question per command, none per job
+    finally:
+        if server:
+            server.close()
+
+
+def test_a_server_that_stops_answering_costs_one_attempt_per_process(tmp_path, monkeypatch, capsys):
+    """It answered when the command started, then not: the first job's logging times out
+    (MLflow's timeout and retries bounded, here through the environment), says so, and the
+    process's later jobs do not try again."""
+    server = _Server(health=True)
+    monkeypatch.setenv("MLFLOW_HTTP_REQUEST_TIMEOUT", "1")
+    monkeypatch.setenv("MLFLOW_HTTP_REQUEST_MAX_RETRIES", "0")
+    try:
+        job, config, _ = job_dir(tmp_path)
+        callback = MlflowCallback("x", tracking_uri=server.uri, artifacts=True, timeseries=False)
+        callback.on_run_start(config)
+        callback.on_job_end(config, job_return=None)
+        callback.on_job_end(config, job_return=None)
+        out = capsys.readouterr().out.splitlines()
+        assert len(out) == 1 and out[0].startswith("mlflow: could not log 14-03-12_fr3_impedance_quintic: ")
+        assert out[0].endswith("no more attempts from this process")
+        assert sum(" /health " not in r for r in server.requests) == 1
+    finally:
+        server.close()

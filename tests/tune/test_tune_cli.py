@@ -9,7 +9,7 @@ import optuna
 import pytest
 import yaml
 
-from tests.helpers import make_cfg, sweep_cli
+from tests.helpers import cli_in_process, make_cfg, sweep_cli
 
 #: short docking runs that dock: a 2 cm stroke in 1 s, then 1.5 s to settle
 SHORT_TUNE = (
@@ -77,3 +77,79 @@ def test_a_small_study_finishes_writes_the_best_gains_and_resumes(sweep_dir):
     assert (sweep / "tuning" / "optimisation_history.png").is_file()
     # the sweep's own summary covers every job (one row each)
     assert len((sweep / "summary.csv").read_text().strip().splitlines()) == 1 + 6 * DRAWS
+
+
+# --------------------------------------------------------------------------- refused up front
+
+
+def test_a_search_space_outside_a_settings_range_is_refused_before_anything(tmp_path, monkeypatch, capsys):
+    """Before: every trial's jobs failed the run's check (96 failed jobs), and the study exited 0."""
+    monkeypatch.chdir(tmp_path)
+    code, err = cli_in_process(capsys, "-m", *SHORT_TUNE, "controller.k=interval(-100,1000)")
+    assert code == 1
+    assert err.startswith("compliant-docking: the sweep is refused; nothing was run or written.")
+    assert "controller.k must be a finite number >= 0 N/m; got -100.0." in err
+    assert (
+        "[the search space reaches this job: controller.d=30.0 controller.k=-100.0, draw task.misalignment.seed=0]"
+        in err
+    )
+    assert not (tmp_path / "runs").exists()  # no directory, no .finished_jobs
+
+
+@pytest.mark.parametrize("content", [b"", b"not a database at all" * 100])
+def test_a_corrupt_study_is_refused_clearly_and_left_as_it_is(tmp_path, monkeypatch, capsys, content):
+    """Before: the same command started runs/tune/<study>_2 without a word."""
+    monkeypatch.chdir(tmp_path)
+    study_dir = tmp_path / "runs" / "tune" / "fr3_impedance"
+    study_dir.mkdir(parents=True)
+    (study_dir / "study.db").write_bytes(content)
+    (study_dir / "multirun.yaml").write_text("hydra:\n  sweeper:\n    study_name: fr3_impedance\n")
+    code, err = cli_in_process(capsys, "-m", *SHORT_TUNE)
+    assert code == 1
+    assert f"the study storage {study_dir / 'study.db'} cannot be read (" in err
+    assert "move it away to start the study afresh" in err
+    assert (study_dir / "study.db").read_bytes() == content
+    assert sorted(p.name for p in study_dir.iterdir()) == ["multirun.yaml", "study.db"]
+    assert sorted(p.name for p in study_dir.parent.iterdir()) == ["fr3_impedance"]  # no fr3_impedance_2
+
+
+def test_a_study_directory_holding_something_else_is_refused(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    other = tmp_path / "runs" / "tune" / "fr3_impedance"
+    other.mkdir(parents=True)
+    (other / "notes.txt").write_text("mine")
+    code, err = cli_in_process(capsys, "-m", *SHORT_TUNE)
+    assert code == 1 and "hydra.sweep.dir=runs/tune/fr3_impedance holds something other than" in err
+    assert sorted(p.name for p in other.parent.iterdir()) == ["fr3_impedance"]
+
+
+@pytest.mark.slow
+def test_the_same_command_continues_the_study_in_its_directory(tmp_path):
+    """The documented command, twice, with the preset's own directory (runs/tune/<study>):
+    the second continues the study there. Before: it started runs/tune/<study>_2."""
+    import os
+    import subprocess
+    import sys
+
+    from tests.helpers import REPO_ROOT
+
+    def tune(n_trials: int) -> subprocess.CompletedProcess:
+        return subprocess.run(
+            [sys.executable, "-m", "compliant_docking", "-m", *SHORT_TUNE, f"hydra.sweeper.n_trials={n_trials}",
+             "hydra.sweeper.parallel_trials=1", "hydra.sweeper.draws={task.misalignment.seed:'range(1)'}",
+             "hydra/launcher=basic"],
+            cwd=tmp_path, capture_output=True, text=True, timeout=600,
+            env={**os.environ, "PYTHONUNBUFFERED": "1", "PYTHONPATH": str(REPO_ROOT)},
+        )  # fmt: skip
+
+    first = tune(1)
+    assert first.returncode == 0, first.stderr[-3000:]
+    again = tune(2)
+    assert again.returncode == 0, again.stderr[-3000:]
+    assert "study fr3_impedance in runs/tune/fr3_impedance/study.db" in again.stdout
+    assert "1 told earlier" in again.stdout
+    assert sorted(p.name for p in (tmp_path / "runs" / "tune").iterdir()) == ["fr3_impedance"]
+    study = optuna.load_study(
+        study_name="fr3_impedance", storage=f"sqlite:///{tmp_path / 'runs/tune/fr3_impedance/study.db'}"
+    )
+    assert len(study.trials) == 2

@@ -44,6 +44,8 @@ import mujoco
 import numpy as np
 
 from compliant_docking.config.geometry import ContactParams
+from compliant_docking.config.ranges import Range
+from compliant_docking.config.ranges import problems as range_problems
 from compliant_docking.sim.geometry.cad_fragments import target_fragment, tool_fragment
 from compliant_docking.sim.geometry.clearance import (
     LIFT,
@@ -122,24 +124,50 @@ class ConvertOptions:
 
         return replace(self, contact=default_interface()[2])
 
-    def check(self) -> None:
+    def problems(self) -> list[tuple[str, str]]:
+        """Every option that cannot be used, as (field, one sentence naming it, what is
+        allowed and the value given); [] when all can. NaN and inf are never allowed."""
+        found: list[tuple[str, str]] = []
         if self.collision not in COLLISIONS:
-            raise ValueError(f"collision must be one of {COLLISIONS}; got {self.collision!r}")
+            found.append(
+                ("collision", f"collision must be one of {', '.join(COLLISIONS)}; got {self.collision!r}.")
+            )
         if self.unit not in UNITS:
-            raise ValueError(f"unit must be one of {sorted(UNITS)}; got {self.unit!r}")
-        if not (isinstance(self.symmetry, int) and self.symmetry >= 0):
-            raise ValueError(f"symmetry must be an integer >= 0 (0: round); got {self.symmetry!r}")
-        if not 0.0 < self.keep <= 1.0:
-            raise ValueError(f"keep must be in (0, 1] (share of the clearance to keep); got {self.keep}")
-        self.conform.check()
-        if not (math.isfinite(self.audit_tolerance_deg) and 0.0 < self.audit_tolerance_deg < 90.0):
-            raise ValueError(
-                f"audit_tolerance_deg must be in (0, 90) [deg]; got {self.audit_tolerance_deg!r}"
-            )
-        if not 0.0 < self.min_threshold <= self.coacd.threshold:
-            raise ValueError(
-                f"min_threshold must be in (0, threshold = {self.coacd.threshold}]; got {self.min_threshold}"
-            )
+            found.append(("unit", f"unit must be one of {', '.join(sorted(UNITS))}; got {self.unit!r}."))
+        threshold = self.coacd.threshold
+        values = {
+            "symmetry": (self.symmetry, Range(low=0, integer=True)),
+            "plug_mass": (self.plug_mass, Range(low=0.0, low_open=True, unit="kg")),  # None: density × volume
+            "density": (self.density, Range(low=0.0, low_open=True, unit="kg/m³")),
+            "threshold": (threshold, Range(low=0.0, high=1.0, low_open=True)),
+            "min_threshold": (
+                self.min_threshold,
+                Range(low=0.0, high=threshold if math.isfinite(threshold) else 1.0, low_open=True),
+            ),
+            "max_pieces": (self.max_pieces, Range(low=-1, integer=True)),
+            "keep": (self.keep, Range(low=0.0, high=1.0, low_open=True)),
+            "lift": (self.lift, Range(low=0.0, unit="m")),
+            "samples": (self.samples, Range(low=1, integer=True)),
+            "audit_tolerance_deg": (
+                self.audit_tolerance_deg,
+                Range(low=0.0, high=90.0, low_open=True, high_open=True, unit="deg"),
+            ),
+        }
+        for name, (value, allowed) in values.items():
+            found += [(name, text) for text in range_problems(name, value, allowed)]
+        if self.max_pieces == 0:
+            found.append(("max_pieces", "max_pieces must be -1 (no cap) or at least 1; got 0."))
+        try:
+            self.conform.check()  # the rebuilding's own rule (margin, bevel_deg)
+        except ValueError as exc:
+            found.append((str(exc).split(" ", 1)[0], f"{exc}."))
+        return found
+
+    def check(self) -> None:
+        """Raise ValueError naming every option that cannot be used (:meth:`problems`)."""
+        found = self.problems()
+        if found:
+            raise ValueError(" ".join(text for _, text in found))
 
 
 class Refused(ValueError):
