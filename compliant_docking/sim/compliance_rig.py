@@ -361,21 +361,24 @@ def ramp_insertion(rig: Rig, *, end_height: float, max_force: float = 50.0, max_
         raise ValueError(f"ramp_insertion needs a rig built with drive=Ramp(...); got {rig.drive!r}.")
     mujoco.mj_resetData(model, data)
     mujoco.mj_forward(model, data)
-    speed = rig.drive.speed
-    n = int(round(max_time / model.opt.timestep))
+    speed, dt = rig.drive.speed, model.opt.timestep
+    n = int(round(max_time / dt))
     rows = np.full((n, 8), math.nan)
     contacts: list[list[float]] = []
     stopped = "time"
+    tcp, seat_z = rig.tcp_site, float(data.site_xpos[rig.seat_site][2])
     for k in range(n):
-        data.ctrl[0] = -speed * (data.time + model.opt.timestep)
+        data.ctrl[0] = -speed * (data.time + dt)
         mujoco.mj_step(model, data)
-        total = np.zeros(3)
-        for plug, other, point, normal, dist, force in plug_contacts(rig):
-            total += force
-            contacts.append([k, plug, other, *point, *normal, dist, *force])
+        total = [0.0, 0.0, 0.0]
+        if data.ncon:
+            for plug, other, point, normal, dist, force in plug_contacts(rig):
+                total = [total[0] + force[0], total[1] + force[1], total[2] + force[2]]
+                contacts.append([k, plug, other, *point, *normal, dist, *force])
         servo = -float(data.actuator_force[0])
-        rows[k] = (data.time, tip_height(rig), data.site_xpos[rig.tcp_site][0], plug_tilt(rig), *total, servo)
-        if rows[k, 1] <= end_height:
+        height = float(data.site_xpos[tcp][2]) - seat_z
+        rows[k] = (data.time, height, data.site_xpos[tcp][0], plug_tilt(rig), *total, servo)
+        if height <= end_height:
             stopped = "depth"
             break
         if servo > max_force:
