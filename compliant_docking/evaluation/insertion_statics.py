@@ -31,6 +31,7 @@ cones), the peg is wedged: it goes no deeper, whatever the force.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import lru_cache
 from itertools import combinations
@@ -223,10 +224,25 @@ def _rest_centre(p: PegInHole) -> float:
     return p.lateral_error + p.compliance_height * math.sin(p.tilt)
 
 
+def _fixed_point(p: PegInHole, theta: float, step: Callable[[float], State | None]) -> State | None:
+    """Iterate ``step`` (the state solved with the tilt-dependent terms taken at θ) until its
+    tilt reproduces θ to 1e-12 rad; None if it fails, turns past MAX_ROTATION or has not
+    converged after ITERATIONS."""
+    for _ in range(ITERATIONS):
+        state = step(theta)
+        if state is None or abs(state.theta - p.tilt) > MAX_ROTATION:
+            return None
+        if abs(state.theta - theta) < 1e-12:
+            return state
+        theta = state.theta
+    return None
+
+
 def _one_contact(p: PegInHole, height: float, key: tuple[str, int], theta: float) -> State | None:
     """Solve K_x (x_c − x_c0) = f u_x, K_θ (θ − θ_0) = f m, gap = 0 for (x_c, θ, f)."""
     k_x, k_t, x_c0 = p.lateral_stiffness, p.angular_stiffness, _rest_centre(p)
-    for _ in range(ITERATIONS):
+
+    def step(theta: float) -> State | None:
         c = _find(p, height, theta, key)
         if c is None:
             return None
@@ -237,14 +253,9 @@ def _one_contact(p: PegInHole, height: float, key: tuple[str, int], theta: float
         if abs(slope) < 1e-15:
             return None
         f = -(c.g0 + c.a * x_c0 + c.b * p.tilt) / slope
-        x_c, new_theta = x_c0 + f * u_x / k_x, p.tilt + f * m / k_t
-        state = State(x_c, new_theta, (c,), (f,))
-        if abs(new_theta - theta) < 1e-12:
-            return state
-        if abs(new_theta - p.tilt) > MAX_ROTATION:
-            return None
-        theta = float(new_theta)
-    return None
+        return State(x_c0 + f * u_x / k_x, p.tilt + f * m / k_t, (c,), (f,))
+
+    return _fixed_point(p, theta, step)
 
 
 def _two_contacts(
@@ -252,7 +263,8 @@ def _two_contacts(
 ) -> State | None:
     """Both gaps zero fix (x_c, θ); the support's force and moment then fix both normal forces."""
     k_x, k_t, x_c0 = p.lateral_stiffness, p.angular_stiffness, _rest_centre(p)
-    for _ in range(ITERATIONS):
+
+    def step(theta: float) -> State | None:
         c1, c2 = _find(p, height, theta, keys[0]), _find(p, height, theta, keys[1])
         if c1 is None or c2 is None:
             return None
@@ -263,15 +275,9 @@ def _two_contacts(
         (u1, _), (u2, _) = c1.force(p), c2.force(p)
         m1, m2 = c1.moment(p, new_theta), c2.moment(p, new_theta)
         forces = _solve2(u1, u2, m1, m2, k_x * (x_c - x_c0), k_t * (new_theta - p.tilt))
-        if forces is None:
-            return None
-        state = State(x_c, new_theta, (c1, c2), forces)
-        if abs(new_theta - theta) < 1e-12:
-            return state
-        if abs(new_theta - p.tilt) > MAX_ROTATION:
-            return None
-        theta = float(new_theta)
-    return None
+        return None if forces is None else State(x_c, new_theta, (c1, c2), forces)
+
+    return _fixed_point(p, theta, step)
 
 
 def solve_state(
