@@ -368,6 +368,9 @@ class TaskConfig:
     strike_window: float = positive(
         unit="s"
     )  # cap of the first strike after first contact (evaluation/contact.py)
+    force_window: float = positive(
+        at_most=1.0, unit="s"
+    )  # the filtered peak force: the peak of the axial force's mean over this window [s]
     gate: DockingGateConfig = MISSING
     tracking_gate: TrackingThresholds = MISSING  # trajectory=tracking
     misalignment: MisalignmentConfig = MISSING  # true vs believed socket pose

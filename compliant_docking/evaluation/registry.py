@@ -73,7 +73,11 @@ class Metric:
 
 METRICS: tuple[Metric, ...] = (
     # contact safety (Table 10)
-    Metric("peak_axial_force_N", CONTACT, "peak axial force", "N", interval=True),
+    # the per-step peak is the Table-10 metric: in a soft-contact simulation an impact's
+    # per-step peak scales with the contact time constant (solref), so the docking gate
+    # judges the filtered peak, the peak of the mean over task.force_window
+    Metric("peak_axial_force_N", CONTACT, "peak axial force (raw, per step)", "N", interval=True),
+    Metric("filtered_peak_axial_force_N", CONTACT, "peak axial force (filtered)", "N", interval=True),
     Metric("peak_wrench_norm_N", CONTACT, "peak wrench norm", "N"),
     Metric("steady_axial_force_N", CONTACT, "steady axial force", "N", interval=True),
     Metric("steady_wrench_norm_N", CONTACT, "steady wrench norm", "N"),

@@ -187,6 +187,7 @@ def evaluate(sim, out_dir: Path, *, figures: bool) -> dict:
         velocity_limits=np.asarray(cfg.robot.velocity_limits, float),
         manipulability=manip,
         steady_window=float(cfg.task.steady_window),
+        force_window=float(cfg.task.force_window),
     )
     result: dict[str, Any] = dict(docking)
     result["contacts_max"] = int(ts["contacts"].max()) if len(ts) else None

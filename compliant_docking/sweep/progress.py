@@ -102,8 +102,11 @@ def job_line(out_dir: Path, sweep_dir: Path, total: int | None, done: int | None
     parts = [f"{count} {out_dir.name}", shown_status]
     if status not in ("failed", "interrupted"):
         parts.append(docked)
-        peak = record.get("peak_axial_force_N")
-        parts.append("peak n/a" if peak is None else f"peak {peak:.1f} N")
+        peak, raw = record.get("filtered_peak_axial_force_N"), record.get("peak_axial_force_N")
+        if peak is None:
+            parts.append("peak n/a")
+        else:  # the force the gate judges, and the raw per-step peak
+            parts.append(f"peak {peak:.1f} N" + ("" if raw is None else f" (raw {raw:.1f} N)"))
         events = record.get("steady_contact_events_per_s")
         if events:  # a bouncing hold shows on the progress line
             parts.append(f"{events:.0f} contact events/s")

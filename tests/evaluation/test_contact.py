@@ -129,7 +129,7 @@ SEATED = SeatState(depth_error_m=1e-4, lateral_error_m=2e-4, tilt_deg=0.5, seate
 def test_the_chatter_gate_item_fails_a_bouncing_hold():
     """A plug seated within every tolerance, under the force budget, but bouncing: the
     docking gate fails it, and says so; the same hold calm passes."""
-    docking = {"peak_axial_force_N": 24.0}
+    docking = {"filtered_peak_axial_force_N": 24.0}
     bouncing = _hold(3.13, 4.89, 203.0)
     failures = docking_gate(SEATED, docking, _gate(), contact=bouncing)
     assert len(failures) == 2
@@ -150,10 +150,13 @@ def test_the_chatter_gate_item_fails_a_bouncing_hold():
 
 
 def test_failure_reasons_say_what_failed():
-    failures = docking_gate(SEATED, {"peak_axial_force_N": 63.6}, _gate())
-    assert docking_verdict(SEATED, _gate(), failures) == "seated; peak force 63.6 N over the 50 N budget"
+    failures = docking_gate(SEATED, {"filtered_peak_axial_force_N": 63.6}, _gate())
+    assert (
+        docking_verdict(SEATED, _gate(), failures)
+        == "seated; peak force 63.6 N (filtered) over the 50 N budget"
+    )
     short = SeatState(depth_error_m=0.0102, lateral_error_m=2e-4, tilt_deg=0.5, seated_time_s=None)
-    failures = docking_gate(short, {"peak_axial_force_N": 30.0}, _gate())
+    failures = docking_gate(short, {"filtered_peak_axial_force_N": 30.0}, _gate())
     assert docking_verdict(short, _gate(), failures) == (
         "not docked: not seated: tip up to 10.2 mm from the seat over the steady window (tolerance 1 mm)"
     )

@@ -25,6 +25,7 @@ from compliant_docking.evaluation.docking import (
     SeatState,
     compute_metrics,
     docking_gate,
+    filtered_peak,
     manipulability_series,
     seat_state,
 )
@@ -35,6 +36,7 @@ from tests.helpers import make_cfg
 DT = 0.01
 N = 1000  # t = 0 … 9.99 s; every series is constant from t = 5 s on
 STEADY = 2.0  # the steady window: t ≥ 7.99 s, inside the constant part
+FORCE_WINDOW = 0.05  # the filtered peak's window: 5 rows
 #: the docking axis, deliberately oblique and not normalised (compute_metrics normalises it)
 AXIS_RAW = np.array([2.0, -1.0, 2.0]) * 5.0
 AXIS = AXIS_RAW / np.linalg.norm(AXIS_RAW)
@@ -110,6 +112,7 @@ def metrics_of(ts: pd.DataFrame, **overrides) -> dict:
         velocity_limits=V_LIMITS,
         manipulability=manipulability_of(ts["t"].to_numpy()),
         steady_window=STEADY,
+        force_window=FORCE_WINDOW,
     )
     kwargs.update(overrides)
     return compute_metrics(ts, **kwargs)
@@ -117,6 +120,7 @@ def metrics_of(ts: pd.DataFrame, **overrides) -> dict:
 
 EXPECTED = {
     "peak_axial_force_N": 45.0,  # the 45 N pull: a peak of |F| (push 40 N, side force 0 N)
+    "filtered_peak_axial_force_N": 9.0,  # the one-row 45 N pull over a 5-row window (push: 8 N)
     "peak_wrench_norm_N": 50.0,  # ‖[30 N side; 40 N·m]‖ at t = 4 s
     "steady_axial_force_N": 2.5,  # the 1.2 N side force is not axial
     "steady_wrench_norm_N": math.sqrt(2.5**2 + 1.2**2 + 0.9**2),
@@ -178,6 +182,39 @@ def test_missing_or_non_finite_values_are_null_never_made_up():
     assert m["peak_axial_force_N"] is None and m["peak_wrench_norm_N"] is None
     assert m["pos_tracking_rms_m"] is None
     assert m["steady_axial_force_N"] == pytest.approx(2.5, rel=1e-12)  # the window is clean
+
+
+def test_filtered_peak_is_the_peak_of_the_window_mean():
+    """A rectangular impulse of 0.2 N·s lasting 1, 2 or 5 ms (peaks 200, 100, 40 N) reads
+    0.2 / 0.05 = 4 N through a 50 ms window whatever its length (the property the gate
+    needs: an impact's per-step peak scales with the contact time constant, its impulse does
+    not); a held force reads itself; the sign does not matter; a series shorter than the
+    window is averaged whole."""
+    dt = 0.001
+    t = np.arange(400) * dt
+    for rows in (1, 2, 5):
+        force = np.zeros(400)
+        force[100 : 100 + rows] = 0.2 / (rows * dt)
+        assert filtered_peak(force, t, 0.05) == pytest.approx(4.0, rel=1e-12)
+        assert filtered_peak(-force, t, 0.05) == pytest.approx(4.0, rel=1e-12)
+    held = np.where(t >= 0.2, 3.0, 0.0)
+    assert filtered_peak(held, t, 0.05) == pytest.approx(3.0, rel=1e-12)
+    ramp = np.arange(10.0)  # 10 rows < 50: the mean of all, 4.5
+    assert filtered_peak(ramp, t[:10], 0.05) == pytest.approx(4.5, rel=1e-12)
+    assert filtered_peak(ramp, t[:10], 0.0021) == pytest.approx(8.5, rel=1e-12)  # 2 rows: (8 + 9) / 2
+
+
+def test_the_gate_judges_the_filtered_peak_not_the_raw_one():
+    """A raw per-step peak of 120 N whose filtered peak is 40 N passes a 50 N budget; a
+    filtered 60 N fails it, and the message says it is the filtered force."""
+    seat = SeatState(0.0, 0.0, 0.0, 1.0)
+    gate = SimpleNamespace(
+        depth_tolerance_m=1e-3, lateral_tolerance_m=1e-3, tilt_tolerance_deg=2.0, peak_force_budget_N=50.0
+    )
+    metrics = {"peak_axial_force_N": 120.0, "filtered_peak_axial_force_N": 40.0}
+    assert docking_gate(seat, metrics, gate) == []
+    metrics = {"peak_axial_force_N": 45.0, "filtered_peak_axial_force_N": 60.0}
+    assert docking_gate(seat, metrics, gate) == ["peak force 60 N (filtered) over the 50 N budget"]
 
 
 # --------------------------------------------------------------------------- manipulability
@@ -277,7 +314,7 @@ GATE_ITEMS = {
     "seat depth error": ("depth_tolerance_m", "seat", "depth_error_m", "not seated: "),
     "seat lateral error": ("lateral_tolerance_m", "seat", "lateral_error_m", "off the axis: "),
     "plug tilt": ("tilt_tolerance_deg", "seat", "tilt_deg", "tilted: "),
-    "peak axial force": ("peak_force_budget_N", "metrics", "peak_axial_force_N", "peak force "),
+    "peak axial force": ("peak_force_budget_N", "metrics", "filtered_peak_axial_force_N", "peak force "),
     "key yaw": ("key_yaw_tolerance_deg", "seat", "key_yaw_deg", "key yaw "),
     "steady contact events": (
         "max_contact_events_per_s",
@@ -301,7 +338,9 @@ def _judge(item: str | None = None, value=None, gate=GATE) -> list[str]:
     seat = SeatState(
         half["depth_error_m"], half["lateral_error_m"], half["tilt_deg"], 3.0, key_yaw_deg=half["key_yaw_deg"]
     )
-    metrics = dict.fromkeys(DOCKING_KEYS, 1.0) | {"peak_axial_force_N": half["peak_axial_force_N"]}
+    metrics = dict.fromkeys(DOCKING_KEYS, 1.0) | {
+        "filtered_peak_axial_force_N": half["filtered_peak_axial_force_N"]
+    }
     contact = dict.fromkeys(CONTACT_KEYS, 1.0) | {
         "steady_force_mean_N": HOLD_MEAN_N,
         "steady_force_std_N": half["steady_force_std_N"],
@@ -342,13 +381,13 @@ def test_a_missing_or_non_finite_gate_value_fails(item, value):
 
 def test_every_failing_item_is_listed_with_its_value_and_limit():
     seat = SeatState(2e-3, 3e-3, 4.0, None, key_yaw_deg=5.0)
-    metrics = dict.fromkeys(DOCKING_KEYS) | {"peak_axial_force_N": 80.0}
+    metrics = dict.fromkeys(DOCKING_KEYS) | {"filtered_peak_axial_force_N": 80.0}
     failures = docking_gate(seat, metrics, SimpleNamespace(**GATE), key_yaw_limit_deg=2.44)
     assert failures[:4] == [
         "not seated: tip up to 2 mm from the seat over the steady window (tolerance 1 mm)",
         "off the axis: tip up to 3 mm from the socket axis over the steady window (tolerance 1 mm)",
         "tilted: plug up to 4° off the socket axis (tolerance 2°)",
-        "peak force 80 N over the 50 N budget",
+        "peak force 80 N (filtered) over the 50 N budget",
     ]
     assert len(failures) == 5 and failures[4].startswith("key yaw 5 deg > 2.44 deg")
     # a round interface has no key: its yaw is not judged

@@ -212,7 +212,7 @@ def test_gate_key_yaw_tolerance_defaults_to_the_play():
     gate.key_yaw_tolerance_deg = 1.0
     assert key_yaw_limit(gate, Key(4, 2.34)) == 1.0
     seated = SeatState(1e-5, 1e-4, 0.1, 3.0, key_yaw_deg=2.0)
-    metrics = {"peak_axial_force_N": 5.0}
+    metrics = {"peak_axial_force_N": 5.0, "filtered_peak_axial_force_N": 5.0}
     assert docking_gate(seated, metrics, gate) == []  # no key limit: not checked
     (failure,) = docking_gate(seated, metrics, gate, 1.0)
     assert failure.startswith("key yaw 2 deg > 1 deg") and "not lined up" in failure

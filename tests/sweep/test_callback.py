@@ -190,16 +190,25 @@ def test_job_line_and_exit_status(tmp_path):
     job = tmp_path / "sweep" / "3_controller=hqp"
     job.mkdir(parents=True)
     (job / "metrics.json").write_text(
-        json.dumps({"status": "ok", "success": True, "peak_axial_force_N": 12.34, "wall_time_s": 4.2})
+        json.dumps(
+            {
+                "status": "ok",
+                "success": True,
+                "peak_axial_force_N": 42.34,
+                "filtered_peak_axial_force_N": 12.34,
+                "wall_time_s": 4.2,
+            }
+        )
     )
     line = job_line(job, tmp_path / "sweep", total=6)
-    assert line == "[1/6] 3_controller=hqp · finished · docked · peak 12.3 N · 4.2 s"
+    # the force the gate judges, then the raw per-step peak
+    assert line == "[1/6] 3_controller=hqp · finished · docked · peak 12.3 N (raw 42.3 N) · 4.2 s"
     (job / "metrics.json").write_text(
         json.dumps({"status": "failed", "success": False, "error": "diverged", "wall_time_s": 1.0})
     )
     # the second line of this sweep: numbered 2 (each call is a job finishing)
     assert job_line(job, tmp_path / "sweep", None) == "[2 done] 3_controller=hqp · FAILED · 1.0 s · diverged"
-    bouncing = {"status": "ok", "success": False, "peak_axial_force_N": 24.1, "wall_time_s": 4.2}
+    bouncing = {"status": "ok", "success": False, "filtered_peak_axial_force_N": 24.1, "wall_time_s": 4.2}
     bouncing.update(
         steady_contact_events_per_s=203.0, gate_verdict="seated; contact chatter: 203 make/break events/s"
     )

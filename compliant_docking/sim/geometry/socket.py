@@ -16,8 +16,8 @@ whose inner surface is the bore face, the lip edge where bore and funnel meet (a
 edge of the solid, so it belongs to one piece and is never split) and the funnel face.
 Its sides reach past the polygon corners into the neighbouring pieces, which bury them
 (more than 0.3 mm deep at the defaults, against contact penetrations of micrometres).
-Below the seat plane every wall piece reaches down through the floor slab, whose top
-face is the seat plane z = 0.  No piece intrudes into the nominal free space: the radial
+Below the seat plane every wall piece reaches down through the floor slab (a box), whose
+top face is the seat plane z = 0.  No piece intrudes into the nominal free space: the radial
 clearance is never below ``radial_clearance``; it grows to ``bore_radius * (1 / cos(pi /
 sectors) - 1)`` more at the polygon corners (0.20 mm extra for 16 sectors).
 
@@ -49,10 +49,13 @@ from compliant_docking.sim.geometry.collision import SOCKET_GROUP, SOCKET_RGBA, 
 @dataclass(frozen=True)
 class Piece:
     """One convex socket piece: its name and the vertices [m] of the convex polyhedron,
-    socket frame (MuJoCo collides the convex hull of a mesh's vertices)."""
+    socket frame (MuJoCo collides the convex hull of a mesh's vertices). ``box``: the
+    piece is the axis-aligned box its vertices span, built as a box primitive (whose
+    support function is analytic: cheaper to collide than a mesh)."""
 
     name: str
     vertices: tuple[tuple[float, float, float], ...]
+    box: bool = False
 
 
 def _rotate_z(points: np.ndarray, angle: float) -> np.ndarray:
@@ -60,8 +63,8 @@ def _rotate_z(points: np.ndarray, angle: float) -> np.ndarray:
     return points @ np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
-def _as_piece(name: str, points: np.ndarray) -> Piece:
-    return Piece(name, tuple((float(x), float(y), float(z)) for x, y, z in points))
+def _as_piece(name: str, points: np.ndarray, box: bool = False) -> Piece:
+    return Piece(name, tuple((float(x), float(y), float(z)) for x, y, z in points), box)
 
 
 def socket_pieces(geom: SocketGeometry) -> list[Piece]:
@@ -98,8 +101,8 @@ def cavity_pieces(
     the funnel's inradius at the mouth, t = ``wall_thickness`` and f =
     ``floor_thickness``, from y = -w to w with w = (r_m + t) tan(pi/sectors): the solid
     behind both of face k's planes, wide enough to close the walls at the mouth.
-    ``floor``: the slab -f <= z <= 0 under the whole block, whose outline is the
-    ``sectors``-gon of inradius r_m + t (the wall pieces' backs).
+    ``floor``: the square slab -f <= z <= 0, |x|, |y| <= r_m + t, under the block (a box:
+    it costs less to collide than a mesh; the seat is its top face inside the bore).
     """
     n = sectors
     rb, t, f = bore_inradius, wall_thickness, floor_thickness
@@ -109,11 +112,9 @@ def cavity_pieces(
     profile = ((rb, -f), (rb, depth), (rm, mouth), (rm + t, mouth), (rm + t, -f))
     prism = np.array([(x, y, z) for x, z in profile for y in (-w, w)])
     pieces = [_as_piece(f"wall_{k}", _rotate_z(prism, 2.0 * math.pi * k / n)) for k in range(n)]
-    corner = (rm + t) / math.cos(math.pi / n)  # the block's outline: the n-gon of inradius r_m + t
-    azimuth = (2.0 * np.arange(n) + 1.0) * math.pi / n
-    outline = np.column_stack([corner * np.cos(azimuth), corner * np.sin(azimuth)])
-    slab = np.array([(x, y, z) for z in (-f, 0.0) for x, y in outline])
-    return pieces + [_as_piece("floor", slab)]
+    a = rm + t  # the square circumscribing the block's inscribed circle
+    slab = np.array([(x, y, z) for x in (-a, a) for y in (-a, a) for z in (-f, 0.0)])
+    return pieces + [_as_piece("floor", slab, box=True)]
 
 
 def build_socket(geom: SocketGeometry, contact: ContactParams) -> mujoco.MjSpec:
@@ -127,20 +128,32 @@ def build_socket(geom: SocketGeometry, contact: ContactParams) -> mujoco.MjSpec:
 
 
 def piece_socket_spec(pieces: list[Piece], contact: ContactParams, mouth_height: float) -> mujoco.MjSpec:
-    """A socket fragment made of convex ``pieces``, each a mesh geom meeting every plug
-    piece, with the sites ``seat`` at the origin and ``mouth`` at (0, 0, mouth_height)."""
+    """A socket fragment made of convex ``pieces``, each a mesh geom (a box primitive for a
+    ``box`` piece) meeting every plug piece, with the sites ``seat`` at the origin and
+    ``mouth`` at (0, 0, mouth_height)."""
     spec = mujoco.MjSpec()
     spec.modelname = "socket"
     body = spec.worldbody.add_body(name="dock")
     for piece in pieces:
-        spec.add_mesh(name=piece.name, uservert=np.ravel(piece.vertices).tolist())
-        g = body.add_geom(
-            name=piece.name,
-            type=mujoco.mjtGeom.mjGEOM_MESH,
-            meshname=piece.name,
-            group=SOCKET_GROUP,
-            rgba=list(SOCKET_RGBA),
-        )
+        if piece.box:
+            low, high = np.min(piece.vertices, axis=0), np.max(piece.vertices, axis=0)
+            g = body.add_geom(
+                name=piece.name,
+                type=mujoco.mjtGeom.mjGEOM_BOX,
+                pos=(0.5 * (low + high)).tolist(),
+                size=(0.5 * (high - low)).tolist(),
+                group=SOCKET_GROUP,
+                rgba=list(SOCKET_RGBA),
+            )
+        else:
+            spec.add_mesh(name=piece.name, uservert=np.ravel(piece.vertices).tolist())
+            g = body.add_geom(
+                name=piece.name,
+                type=mujoco.mjtGeom.mjGEOM_MESH,
+                meshname=piece.name,
+                group=SOCKET_GROUP,
+                rgba=list(SOCKET_RGBA),
+            )
         make_socket_collider(g, contact)
     body.add_site(name="seat", pos=[0.0, 0.0, 0.0])
     body.add_site(name="mouth", pos=[0.0, 0.0, mouth_height])
