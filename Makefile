@@ -8,7 +8,7 @@ VENV   ?= .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: run test test-slow test-all lint benchmark setup gl clean notebook
+.PHONY: run test test-slow test-wheel test-all lint benchmark setup gl clean notebook
 
 setup: $(STAMP)
 
@@ -16,7 +16,7 @@ $(STAMP): pyproject.toml
 	$(PYTHON) -c 'import sys; sys.exit("compliant-docking needs Python >= 3.11, found " + sys.version.split()[0]) if sys.version_info < (3, 11) else None'
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e '.[test]'
+	$(PY) -m pip install --quiet -e '.[test,dev]'
 	touch $(STAMP)
 
 run: $(STAMP) gl
@@ -36,8 +36,13 @@ lint: $(STAMP)
 test-slow: $(STAMP) gl
 	$(PY) -m pytest -q -n $(XDIST) -m slow $(PYTEST_ARGS)
 
+# the built wheel in a fresh virtualenv, run from outside the checkout (tests/test_package.py)
+test-wheel: $(STAMP)
+	$(PY) -m pytest -q -n 0 -m wheel $(PYTEST_ARGS)
+
+# everything: the fast suite, the slow simulations and sweeps, the wheel
 test-all: $(STAMP) gl
-	$(PY) -m pytest -q -n $(XDIST) -m 'slow or not slow' $(PYTEST_ARGS)
+	$(PY) -m pytest -q -n $(XDIST) -m 'slow or wheel or not slow' $(PYTEST_ARGS)
 
 # Offscreen rendering (render=video) without a display needs EGL (or OSMesa) from the
 # system, not from pip: check that one loads; if not, install Debian's EGL packages

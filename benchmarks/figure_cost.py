@@ -27,7 +27,7 @@ VARIANTS = {
     "+ mathtext tick labels": (["png"], {"axes.formatter.use_mathtext": True}),
     "+ constrained layout engine": (["png"], {"figure.constrained_layout.use": True}),
     "+ tight bounding box": (["png"], {"savefig.bbox": "tight"}),
-    "all of them (before issue 12)": (
+    "all of them (the earlier figures)": (
         ["png", "pdf"],
         {
             "axes.formatter.use_mathtext": True,

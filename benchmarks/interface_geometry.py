@@ -37,12 +37,12 @@ if __package__ in (None, ""):
 
 from contact_geometry import CONTACT, PLUG, SOCKET, Case, rig_from_fragments  # noqa: E402
 
-from compliant_docking import REPO_ROOT  # noqa: E402
 from compliant_docking.config.store import default_keyed  # noqa: E402
 from compliant_docking.sim.compliance_rig import push_insertion  # noqa: E402
 from compliant_docking.sim.geometry import build_plug, build_socket  # noqa: E402
 from compliant_docking.sim.geometry.keyed import build_keyed_plug, build_keyed_socket  # noqa: E402
 
+REPO_ROOT = Path(__file__).resolve().parents[1]  # the checkout
 EXAMPLE = REPO_ROOT / "assets" / "interfaces" / "keyed_cad"
 #: (case, yaw of the socket about its axis [deg]): 1.5° is inside the keyed pair's 2.34° play
 CASES = (

@@ -28,11 +28,13 @@ import tempfile
 import time
 from pathlib import Path
 
-from compliant_docking import CONF_DIR, REPO_ROOT
+from compliant_docking import CONF_DIR
 from compliant_docking.config import load_config
 from compliant_docking.sim.simulate import prepare, replay_physics
 
-#: targets of issue 12 (on both robots): minimum real-time factor and maximum loop/replay
+REPO_ROOT = Path(__file__).resolve().parents[1]  # the checkout
+
+#: the speed targets (on both robots): minimum real-time factor and maximum loop/replay
 RTF_TARGETS = {"impedance": 25.0, "hqp": 15.0, "se3_lie": 25.0}
 RATIO_TARGETS = {"impedance": 3.5, "hqp": 5.0, "se3_lie": 3.5}
 CLI_TARGET_S = 10.0

@@ -1,4 +1,4 @@
-"""Sweep throughput, as ratios measured in one run (issue 12): where a job's time goes.
+"""Sweep throughput, as ratios measured in one run: where a job's time goes.
 
     python benchmarks/throughput.py                    # everything (~5 min on 2 cores)
     python benchmarks/throughput.py --no-presets       # without the three preset sweeps
@@ -48,7 +48,7 @@ sys.path.insert(0, str(REPO / "benchmarks"))
 
 SECTIONS = ("cli", "bookkeeping", "sweep", "loop", "presets")
 PRESETS = ("controller_comparison", "misalignment", "clearance")
-#: acceptance of issue 12
+#: the targets of a sweep's overhead
 LOOP_SHARE_TARGET = 0.5
 BOOKKEEPING_TARGET_S = 0.3
 CLI_TARGET_S = 3.0

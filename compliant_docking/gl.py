@@ -1,32 +1,41 @@
-"""Which OpenGL backend MuJoCo uses, decided once, before ``import mujoco``.
+"""Which OpenGL backend MuJoCo's offscreen rendering uses, chosen when rendering starts.
 
 MuJoCo reads the environment variable ``MUJOCO_GL`` when it is first imported and binds
-its offscreen GL context to that backend for the life of the process: ``glfw`` (the
-default: a hidden window, needs a display), ``egl`` (headless, libEGL with Mesa or a GPU
-driver) or ``osmesa`` (headless software rendering). ``compliant_docking/__init__.py``
-calls :func:`configure` on import, which sets ``MUJOCO_GL`` when the user has not:
+``mujoco.GLContext`` (and so ``mujoco.Renderer``) to that backend for the life of the
+process: ``glfw`` (the default: a hidden window, needs a display), ``egl`` (headless,
+libEGL with Mesa or a GPU driver) or ``osmesa`` (headless software rendering). A run has
+imported mujoco long before its video is rendered, and with ``MUJOCO_GL`` unset on a
+headless machine MuJoCo 4.0's ``Renderer`` then fails (``mjr_makeContext``: no OpenGL
+platform library loaded) and leaves the process unable to make any context.
+
+So nothing is decided at import. :func:`configure`, called by the video renderer
+(``viz/render.py``) and the viewer when they start, chooses the backend:
 
 =====================================================  ==============================
-situation (first match wins)                           MUJOCO_GL
+situation (first match wins)                           backend
 =====================================================  ==============================
 the user set ``MUJOCO_GL``                             kept as it is
 ``PYOPENGL_PLATFORM`` is ``egl`` or ``osmesa``         the same (they must agree)
-not Linux (macOS, Windows)                             left unset (MuJoCo's default)
-a display is reachable (X11 or Wayland)                left unset: GLFW, which the
-                                                       interactive viewer needs too
+not Linux (macOS, Windows)                             MuJoCo's default
+a display is reachable (X11 or Wayland)                GLFW, which the interactive
+                                                       viewer needs too
 no display, libEGL loads and an EGL vendor is listed   ``egl``
 no display, libOSMesa loads                            ``osmesa``
-no display, neither                                    left unset (a video is refused
+no display, neither                                    none (a video is refused
                                                        with :func:`no_backend_message`)
 =====================================================  ==============================
 
-The decision does not look at the run's config: it is made before Hydra composes it,
-and a display always means GLFW, so ``viewer=true`` works however it was set (command
-line, preset, notebook). Child processes (sweep workers) inherit the variable; the
-marker ``COMPLIANT_DOCKING_GL`` records that the value was ours, not the user's.
+and :func:`context_class` gives that backend's context class from MuJoCo's own backend
+modules (``mujoco.egl``, ``mujoco.osmesa``, ``mujoco.glfw``), whether or not mujoco was
+imported before: the video renderer makes its context from it. When mujoco is not imported
+yet, :func:`configure` also exports ``MUJOCO_GL`` (MUJOCO_GL must be set before
+``import mujoco`` to take effect there), so ``mujoco.Renderer`` in the same process, and
+child processes, agree; the marker ``COMPLIANT_DOCKING_GL`` records that the value was
+ours, not the user's.
 
-This module must stay cheap: it is imported by the package's ``__init__``. It probes the
-libraries with ``ctypes`` only when it has to choose (no display, no user setting).
+The decision does not look at the run's config, and a display always means GLFW, so
+``viewer=true`` and ``render=video`` work together. It probes the libraries with
+``ctypes`` only when it has to choose (no display, no user setting).
 """
 
 from __future__ import annotations
@@ -164,47 +173,51 @@ def osmesa_available() -> bool:
 
 #: the decision of this process (set by :func:`configure`)
 _decision: Decision | None = None
-#: whether mujoco was already imported when :func:`configure` ran (then the choice came too late)
-_too_late = False
 
 
 def configure(environ: MutableMapping[str, str] = os.environ) -> Decision:
-    """Decide the backend and export it as MUJOCO_GL; idempotent. Call before ``import mujoco``.
-
-    When mujoco is already imported, nothing is changed (it has bound its backend
-    already); :func:`no_backend_message` then says so.
-    """
-    global _decision, _too_late
+    """Choose the backend (once per process) and, while mujoco is not imported yet, export
+    it as MUJOCO_GL. Called where rendering starts (video, viewer), never at import."""
+    global _decision
     if _decision is not None:
         return _decision
-    _too_late = "mujoco" in sys.modules
     decision = choose(environ)
-    if not _too_late and decision.source == "auto" and decision.backend and not environ.get(MUJOCO_GL):
+    if "mujoco" not in sys.modules and decision.source == "auto" and decision.backend:
         environ[MUJOCO_GL] = decision.backend
         environ[MARKER] = decision.backend
-    if decision.source == "user" and decision.backend and not _too_late:
+    if decision.source == "user" and decision.backend:
         probe = {"egl": egl_available, "osmesa": osmesa_available}.get(decision.backend)
-        if probe is not None and not probe():  # `import mujoco` is about to fail
+        if probe is not None and not probe():  # no context can be made
             sys.stderr.write(
-                f"warning: MUJOCO_GL={decision.backend} is set but its libraries do not load, "
-                f"so `import mujoco` will fail; install them (Debian: apt-get install -y "
-                f"{DEBIAN_PACKAGES[decision.backend]}) or unset MUJOCO_GL\n"
+                f"warning: MUJOCO_GL={decision.backend} is set but its libraries do not load; "
+                f"install them (Debian: apt-get install -y {DEBIAN_PACKAGES[decision.backend]}) "
+                f"or unset MUJOCO_GL\n"
             )
     _decision = decision
-    # PyOpenGL (imported by mujoco for EGL/OSMesa) logs at INFO that its optional C
+    # PyOpenGL (imported by mujoco's EGL/OSMesa backends) logs at INFO that its optional C
     # accelerator is missing; a run's console is no place for that
     logging.getLogger("OpenGL.acceleratesupport").setLevel(logging.WARNING)
     return decision
 
 
-def too_late() -> bool:
-    """Whether mujoco was imported before the backend could be chosen."""
-    return _too_late
-
-
 def decision() -> Decision:
     """The decision of this process (made now if :func:`configure` has not run)."""
     return _decision or configure()
+
+
+def context_class() -> type:
+    """The GL context class of the chosen backend (``mujoco.egl.GLContext``, …): what a
+    renderer makes its context with, whatever MuJoCo bound at its own import."""
+    backend = decision().backend
+    if backend == "egl":
+        from mujoco.egl import GLContext
+    elif backend == "osmesa":
+        from mujoco.osmesa import GLContext
+    elif backend in (None, "glfw") and sys.platform.startswith("linux"):
+        from mujoco.glfw import GLContext
+    else:  # another platform's backend (cgl, wgl, …): MuJoCo's own choice
+        from mujoco import GLContext
+    return GLContext
 
 
 def offscreen_possible(env: Mapping[str, str] = os.environ) -> bool:
@@ -216,22 +229,17 @@ def offscreen_possible(env: Mapping[str, str] = os.environ) -> bool:
 def no_backend_message(detail: str = "") -> str:
     """The one-paragraph explanation when offscreen rendering is impossible or failed."""
     d = decision()
-    late = (
-        " Note: mujoco was imported before compliant_docking, so the automatic choice "
-        "came too late; import compliant_docking first or set MUJOCO_GL yourself."
-        if _too_late
-        else ""
-    )
     what = f" ({detail})" if detail else ""
     return (
         f"render=video needs an OpenGL context for offscreen rendering and none could be "
-        f"created here{what}; backend: {d.reason}. MuJoCo picks its backend from the "
-        f"environment variable MUJOCO_GL when it is first imported: 'egl' (headless; Debian "
+        f"created here{what}; backend: {d.reason}. Without a display the backend is 'egl' or "
+        f"'osmesa' when their libraries load, or the one the environment variable MUJOCO_GL "
+        f"names: 'egl' (headless; Debian "
         f"packages {DEBIAN_PACKAGES['egl']}), 'osmesa' (headless software rendering; Debian "
         f"package {DEBIAN_PACKAGES['osmesa']}) or 'glfw' (needs a display). Install one "
         f"(`make gl` does it on Debian, as root: apt-get install -y "
-        f"{DEBIAN_PACKAGES['egl']}), or set MUJOCO_GL=egl or MUJOCO_GL=osmesa before "
-        f"starting Python. The simulation's results were kept.{late}"
+        f"{DEBIAN_PACKAGES['egl']}), or set MUJOCO_GL=egl or MUJOCO_GL=osmesa. The "
+        f"simulation's results were kept."
     )
 
 

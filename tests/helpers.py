@@ -10,8 +10,10 @@ from pathlib import Path
 
 import numpy as np
 
-from compliant_docking import REPO_ROOT
 from compliant_docking.config import load_config
+
+#: the checkout the tests run from (its commands, benchmarks, notebook and docs)
+REPO_ROOT = Path(__file__).resolve().parents[1]
 
 #: the composed config for some overrides, exactly as the CLI would build it
 make_cfg = load_config
@@ -111,5 +113,5 @@ def steady_contact(sim, window: float = 2.0) -> tuple[float, float, float]:
 
 
 def calm(rate: float, mean: float, std: float) -> bool:
-    """Issue 10's calm hold: ≤ 5 make/break events per second, std ≤ max(0.5 N, 20 % of the mean)."""
+    """The docking gate's calm hold: ≤ 5 make/break events per second, std ≤ max(0.5 N, 20 % of the mean)."""
     return rate <= 5.0 and std <= max(0.5, 0.2 * mean)

@@ -1,6 +1,6 @@
 """A Hydra callback that kills the worker process of one sweep job (a segmentation fault).
 
-Used by tests/test_sweep.py to check what a sweep does when a worker dies:
+Used by tests/sweep/test_callback.py to check what a sweep does when a worker dies:
 ``+hydra.callbacks.crash._target_=sweep_crash_helper.SegfaultJob`` with this folder on
 PYTHONPATH (loky workers import it when they unpickle the callbacks).
 """

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from compliant_docking import REPO_ROOT
+from tests.helpers import REPO_ROOT
 
 #: the console script pip installed beside this interpreter ([project.scripts])
 SCRIPT = Path(sys.executable).parent / "compliant-docking"

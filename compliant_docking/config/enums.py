@@ -26,7 +26,7 @@ class Cone(Enum):
 
 
 class FrictionComp(Enum):
-    """Friction feed-forward mode (CONTROL_LAWS.md, shared conventions)."""
+    """Friction feed-forward mode (docs/control_laws.md, shared conventions)."""
 
     torque = "torque"  # f·tanh(2·τ_pre/f) + b·v: follows the commanded torque, no dead zone at v = 0
     velocity = "velocity"  # f·tanh(v/0.01) + b·v: classic velocity-sign compensation

@@ -52,7 +52,7 @@ class RobotConfig:
     """An arm: its MJCF and what MJCF cannot carry (velocity limits, software torque clip)."""
 
     name: str = MISSING
-    mjcf: str = MISSING  # arm-only MJCF, relative to the repository root
+    mjcf: str = MISSING  # arm-only MJCF; relative: the working directory's, else under assets/ the package's
     ee_site: str = MISSING  # flange site where the tool is mounted
     velocity_limits: List[float] = positive(at_most=100.0, unit="rad/s")  # datasheet joint speed limits
     torque_limits: List[float] = positive(unit="N·m")  # hardware joint torque limits [N·m] (MJCF ctrlrange)
@@ -153,7 +153,7 @@ class ControllerConfig:
 
 @dataclass
 class ImpedanceConfig(ControllerConfig):
-    """Task-space impedance (CONTROL_LAWS.md §1; seed ``ImpedanceConfig``)."""
+    """Task-space impedance (docs/control_laws.md §1; seed ``ImpedanceConfig``)."""
 
     m: float = positive(unit="kg")
     d: float = at_least(0.0, unit="N·s/m")
@@ -169,7 +169,7 @@ class ImpedanceConfig(ControllerConfig):
 
 @dataclass
 class HQPConfig(ControllerConfig):
-    """HQP-AC: hierarchical QP with adaptive compliance (CONTROL_LAWS.md §2; seed ``HQPConfig``).
+    """HQP-AC: hierarchical QP with adaptive compliance (docs/control_laws.md §2; seed ``HQPConfig``).
 
     The stiffness law K_r = clip((1 − α)·K0, K_min_ratio·K0, K0), α = 1/(1 + exp(−k_alpha·F)),
     already gives 0.5·K0 at F = 0. K0 is this config's, never the impedance gains.
@@ -205,7 +205,7 @@ class HQPConfig(ControllerConfig):
 
 @dataclass
 class SE3LieConfig(ControllerConfig):
-    """SE(3) impedance in exponential coordinates (CONTROL_LAWS.md §3; seed
+    """SE(3) impedance in exponential coordinates (docs/control_laws.md §3; seed
     ``SE3ImpedanceConfig``). Diagonals of the 6×6 A, D, K, translation first."""
 
     A_diag: List[float] = positive(size=6)  # [kg | kg·m²]
@@ -230,7 +230,7 @@ class TrajectoryConfig:
 
 @dataclass
 class QuinticConfig(TrajectoryConfig):
-    """Rest-to-rest quintic along the stroke, orientation held (CONTROL_LAWS.md §4)."""
+    """Rest-to-rest quintic along the stroke, orientation held (docs/control_laws.md §4)."""
 
     duration: float = positive(unit="s")  # the seed's DockingConfig.traj_duration [s]
 
@@ -247,7 +247,7 @@ class TwoPhaseConfig(TrajectoryConfig):
     """Approach to a pre-dock point ``standoff`` before the goal, then a slow docking segment.
 
     Each segment is a rest-to-rest quintic of length L lasting
-    T = max(1.875·L/v_max, √(5.7735·L/a_max)) (CONTROL_LAWS.md §4; seed ``TrajectorySpec``).
+    T = max(1.875·L/v_max, √(5.7735·L/a_max)) (docs/control_laws.md §4; seed ``TrajectorySpec``).
     """
 
     standoff: float = at_least(0.0, unit="m")  # pre-dock point this far before the goal, along the axis
@@ -312,7 +312,7 @@ class TrackingThresholds:
     """When a free-space tracking run (``trajectory=tracking``) passes its gate (seed defaults).
 
     RMS and peaks are taken over the planned motion (the segments), contacts over the
-    whole run; see compliant_docking/tracking_gate.py.
+    whole run; see compliant_docking/evaluation/tracking_gate.py.
     """
 
     circle_position_rms_m: float = positive(unit="m")  # position RMS over the circle segment [m]
@@ -332,7 +332,7 @@ class MisalignmentConfig:
     (origin at the seat, +z out of the opening; rotations about the seat point, tilt
     about the yawed x axis). Each component is fixed, or drawn uniformly from its
     ``*_range`` [low, high] with ``seed`` (then the fixed value must stay 0). See
-    compliant_docking/misalignment.py and docs/sweeps.md.
+    compliant_docking/sim/misalignment.py and docs/sweeps.md.
     """
 
     x: float = within(-1.0, 1.0, unit="m")  # lateral offset along the socket x axis [m]

@@ -183,6 +183,10 @@ def composition_problem(exc: BaseException) -> str:
         return unknown_key(key, [f.name for f in dataclasses.fields(schema)])
     if key:
         return f"{key}: {_first_line(cause).rstrip('.')}."
+    if "Could not find 'schema/launcher/submitit_" in str(exc):  # registered only with the plugin
+        from compliant_docking.extras import hint
+
+        return hint("cluster", "Hydra's submitit launcher (hydra-submitit-launcher, submitit)")
     return one_paragraph(exc)
 
 
@@ -219,8 +223,11 @@ def _choice(cfg: DictConfig, group: str) -> str | None:
 
 
 def _group_names() -> set[str]:
-    """The config groups (folders under conf/): their nodes are not schema settings."""
-    return {p.name for p in CONF_DIR.iterdir() if p.is_dir()} if CONF_DIR.is_dir() else set()
+    """The config groups (folders under conf/, not ``__pycache__``): their nodes are not
+    schema settings."""
+    if not CONF_DIR.is_dir():
+        return set()
+    return {p.name for p in CONF_DIR.iterdir() if p.is_dir() and not p.name.startswith(("_", "."))}
 
 
 def _first_line(exc: BaseException) -> str:

@@ -1,6 +1,6 @@
 """``controller=impedance``: operational-space impedance with force feedback.
 
-CONTROL_LAWS.md §1. With e = [x_d − x; log3(R_d Rᵀ)] and ν the TCP twist (world axes),
+docs/control_laws.md §1. With e = [x_d − x; log3(R_d Rᵀ)] and ν the TCP twist (world axes),
 the commanded task acceleration is
 
     a = ν̇_d + W⁻¹(w_ext + K e + D (ν_d − ν)),  W = diag(m,m,m,m_rot,m_rot,m_rot),

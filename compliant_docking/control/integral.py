@@ -1,5 +1,5 @@
 """Integral action on the TCP position error, an option of every controller
-(``integral_*``; docs/controllers/integral.md). Not in CONTROL_LAWS.md."""
+(``integral_*``; docs/controllers/integral.md). Not in docs/control_laws.md."""
 
 from __future__ import annotations
 

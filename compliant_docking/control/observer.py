@@ -1,6 +1,6 @@
 """Generalised-momentum observer: the external wrench on the tool without a force sensor.
 
-CONTROL_LAWS.md §2, last bullet. The arm's dynamics with an external torque τ_ext and
+docs/control_laws.md §2, last bullet. The arm's dynamics with an external torque τ_ext and
 the joint friction τ_f that Pinocchio does not model are
 
     M(q) q̈ + h(q, v) = τ_applied + τ_f + τ_ext,   h = C(q, v) v + g(q).

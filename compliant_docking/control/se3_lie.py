@@ -1,6 +1,6 @@
 r"""``controller=se3_lie``: impedance in exponential coordinates of SE(3).
 
-Kim, Sung, Choi, Park, Chung 2025 (IEEE T-RO); CONTROL_LAWS.md §3;
+Kim, Sung, Choi, Park, Chung 2025 (IEEE T-RO); docs/control_laws.md §3;
 docs/controllers/se3_lie.md.
 
 Conventions
@@ -39,7 +39,7 @@ and, since d/dt Ṽ = Ad(T̃)V̇_d + ad(Ṽ)V − V̇, the body acceleration to 
 
     V̇_ref = Ad(T̃)V̇_d − dexp(λ)λ̈_ref + ad(Ṽ)V − ḋexp(λ, λ̇)λ̇.                   (2)
 
-Two evaluations of (2), equal up to round-off (tests/test_se3_lie.py checks it):
+Two evaluations of (2), equal up to round-off (tests/control/test_se3_lie.py checks it):
 
 * ``formulation=lambda_space``: literally as above. dexp, dexp⁻¹ (closed form) and
   ḋexp come from ``lie.dexp_inv`` / ``lie.dexp_all``; the gain matrices are never

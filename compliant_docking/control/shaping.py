@@ -1,5 +1,5 @@
 """The apparent-inertia floor of the impedance laws (docs/controllers/impedance.md): a
-deviation from CONTROL_LAWS.md §1 and §3, option ``apparent_inertia_floor``."""
+deviation from docs/control_laws.md §1 and §3, option ``apparent_inertia_floor``."""
 
 from __future__ import annotations
 

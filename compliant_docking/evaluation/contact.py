@@ -1,4 +1,4 @@
-"""What the contact did (issue 10): first contact, the first strike, and how calm the held
+"""What the contact did: first contact, the first strike, and how calm the held
 contact is over the steady window. Definitions in docs/run_directory.md ("contact").
 
 Rows of the time series: the ``contacts`` and wrench columns of row k come from the physics

@@ -4,7 +4,7 @@ Computed after the loop from the run's time series (see :mod:`compliant_docking.
 Every value is a float, an int or None: None means it cannot be computed (no data, no
 joint with a finite limit, …), never a made-up number; a non-finite value becomes None.
 
-Conventions (docs/metrics.md):
+Conventions (docs/run_directory.md):
 - ``axis`` is the unit docking axis (direction of insertion, world).
 - axial force = −f·axis, with f the measured force ON the tool: positive when the plug
   presses along the insertion direction (the socket pushes back).

@@ -5,7 +5,7 @@ Computed after the loop from the run's time series (columns: docs in
 ``ori_error_x/y/z`` [rad], ``tau1…`` [N·m], ``torque_saturated``, ``contacts``) and the
 planner's named segments ``(name, t_start, t_end)``.
 
-Statistics (CONTROL_LAWS.md §5; seed ``compute_tracking_metrics``):
+Statistics (docs/control_laws.md §5; seed ``compute_tracking_metrics``):
 
 - per segment, over t ∈ [t_start, t_end): position error RMS and peak [m], orientation
   error (‖log3(R_ref Rᵀ)‖) RMS and peak [rad];

@@ -1,6 +1,6 @@
 """``trajectory=quintic``: rest-to-rest quintic from the start to the goal position.
 
-The orientation is held at the start orientation (CONTROL_LAWS.md §4).
+The orientation is held at the start orientation (docs/control_laws.md §4).
 """
 
 from __future__ import annotations

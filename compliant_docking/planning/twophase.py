@@ -6,7 +6,7 @@ goal's orientation. Each segment is a rest-to-rest quintic of its length L lasti
     T = max(1.875·L/v_max, √(5.7735·L/a_max))
 
 so that the peak speed 1.875·L/T and the peak acceleration 5.7735·L/T² of the quintic
-stay within the segment's limits (CONTROL_LAWS.md §4). Position moves on the straight
+stay within the segment's limits (docs/control_laws.md §4). Position moves on the straight
 line; orientation (the same at both ends in the standard task) follows the SO(3)
 geodesic with the same time scaling. The timing law sees only the length, so a segment
 that rotates without translating is refused (use ``trajectory=se3topp``).

@@ -1,4 +1,4 @@
-"""Figures comparing runs (SciencePlots style, PNG; PDF on request), from a :func:`load_runs` frame.
+"""Figures comparing runs (the run figures' style, PNG; PDF on request), from a :func:`load_runs` frame.
 
 - :func:`metric_bars`: grouped bars of the Table-10 metrics and the success rate across
   configurations (mean over repeats, whiskers: the bootstrap 95 % interval of the mean,

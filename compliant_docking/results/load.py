@@ -70,7 +70,7 @@ def load_runs(path: str | os.PathLike = "runs") -> pd.DataFrame:
     - every leaf of the job's resolved config (``.hydra/config.yaml``) as a dotted column:
       ``controller.k``, ``physics.timestep``, ``target.geometry.radial_clearance``,
       ``task.misalignment.x_range``, … in the config's units (SI unless the key names
-      another, docs/configuration.md); lists as their JSON text (``[-0.002, 0.002]``).
+      another: conf/'s comments); lists as their JSON text (``[-0.002, 0.002]``).
       A leaf overridden on the command line fills the override's column (the resolved
       value, the same number); a leaf whose name is a metrics.json key gets the prefix
       ``config.``. Jobs without a composed config (a run made by ``runner.execute``
@@ -219,18 +219,17 @@ def newest_sweep(root: str | os.PathLike = "runs/multirun") -> Path | None:
     return max(sweeps, key=lambda p: (sweep_started(p), str(p))) if sweeps else None
 
 
-def locate_runs(path: str | os.PathLike) -> Path:
+def locate_runs(path: str | os.PathLike, base: str | os.PathLike | None = None) -> Path:
     """A directory of runs named as the sweep printed it: absolute paths as they are,
-    relative ones from the repository root (where the commands run, so
-    ``runs/multirun/<date>/<time>`` works from a notebook in ``analysis/``), else from the
-    working directory. Raises FileNotFoundError naming both places when neither exists."""
-    from compliant_docking import REPO_ROOT
-
+    relative ones from the working directory, else from ``base`` (the notebook in
+    ``analysis/`` passes the checkout's root, where the commands run, so
+    ``runs/multirun/<date>/<time>`` works from there). Raises FileNotFoundError naming
+    every place looked in when none exists."""
     given = Path(path).expanduser()
     if given.is_absolute():
         candidates = [given]
     else:
-        candidates = [REPO_ROOT / given, Path.cwd() / given]
+        candidates = [Path.cwd() / given] + ([Path(base) / given] if base is not None else [])
     for candidate in candidates:
         if candidate.is_dir():
             return candidate.resolve()

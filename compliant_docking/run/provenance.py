@@ -45,8 +45,7 @@ import socket
 import subprocess
 from datetime import datetime
 from importlib import metadata
-
-from compliant_docking import REPO_ROOT
+from pathlib import Path
 
 #: dotted config keys left out of :func:`config_hash` (see the module docstring)
 HASH_EXCLUDED = ("hydra", "task.progress", "figures")
@@ -67,6 +66,10 @@ VERSIONED = {
 VOLATILE_KEYS = frozenset(
     {"started_at", "wall_time_s", "loop_wall_time_s", "real_time_factor", "video_render_time_s"}
 )
+#: where git_commit is read: the folder above the package, which is a git checkout when
+#: the package runs from one (an editable install); an installed wheel's is site-packages,
+#: never a checkout, so its runs record no commit
+REPO_ROOT = Path(__file__).resolve().parents[2]
 #: seconds allowed for ``git status`` before giving up (null git fields)
 GIT_TIMEOUT_S = 10.0
 

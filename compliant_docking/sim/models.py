@@ -3,7 +3,7 @@
 The controllers never touch MuJoCo's internals: they see the arm through
 :class:`ArmModel`, which Pinocchio builds from the same arm MJCF MuJoCo simulates
 (``buildModelFromMJCF`` reads inertias and armature) with the tool's inertia appended
-to the flange, so M(q) and the bias forces match MuJoCo's (tests/test_models.py).
+to the flange, so M(q) and the bias forces match MuJoCo's (tests/sim/test_models.py).
 
 Conventions: the controlled point is the tool's TCP; its Jacobian ``J`` is expressed
 in LOCAL_WORLD_ALIGNED axes (origin at the TCP, world axes), linear rows first; twists

@@ -30,7 +30,7 @@ import numpy as np
 import pinocchio as pin
 from omegaconf import DictConfig, OmegaConf
 
-from compliant_docking import resolve_path
+from compliant_docking import looked_in, resolve_path
 from compliant_docking.config.geometry import PlugGeometry, SocketGeometry, check_fit
 from compliant_docking.config.keyed import KeyedPlugGeometry, KeyedSocketGeometry, check_keyed_fit
 from compliant_docking.sim.geometry import build_plug, build_socket
@@ -105,7 +105,7 @@ def _load_fragment(kind: str, node: DictConfig, contact: DictConfig | None) -> t
     if node.mjcf:
         path = resolve_path(node.mjcf)
         if not path.is_file():
-            raise ValueError(f"{kind}.mjcf: no such file {path}")
+            raise ValueError(f"{kind}.mjcf: no such file {node.mjcf!r} (looked for {looked_in(node.mjcf)})")
         try:
             spec = mujoco.MjSpec.from_file(str(path))
         except Exception as exc:  # MuJoCo parse errors
@@ -179,7 +179,7 @@ def socket_pose(cfg: DictConfig) -> SocketPose | None:
     """The socket's nominal (believed) and physical (true) seat pose in the world.
 
     believed = ``target.pos``/``target.quat``; true = believed · the misalignment of
-    ``task.misalignment`` (fixed or drawn with its seed; compliant_docking/misalignment.py).
+    ``task.misalignment`` (fixed or drawn with its seed; compliant_docking/sim/misalignment.py).
     """
     offset = draw(cfg.task.get("misalignment"))
     if cfg.target.name == "none":
@@ -258,7 +258,9 @@ def build_scene(cfg: DictConfig) -> Scene:
     """Assemble and compile the scene of ``cfg`` and build the matching Pinocchio arm."""
     robot_path = resolve_path(cfg.robot.mjcf)
     if not robot_path.is_file():
-        raise ValueError(f"robot.mjcf: no such file {robot_path}")
+        raise ValueError(
+            f"robot.mjcf: no such file {cfg.robot.mjcf!r} (looked for {looked_in(cfg.robot.mjcf)})"
+        )
     arm_spec = mujoco.MjSpec.from_file(str(robot_path))
     ee_site = arm_spec.site(cfg.robot.ee_site)
     if ee_site is None:

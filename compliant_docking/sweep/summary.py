@@ -128,7 +128,7 @@ def _report(
     lines = ["=" * 64, f"{head}{elapsed}: {tally.line()}"]
     if missing:
         lines.append(f"  {missing} more jobs never started")
-    if outcome.aborted:  # how to finish it (compliant_docking/resume.py)
+    if outcome.aborted:  # how to finish it (compliant_docking/sweep/resume.py)
         again = f"the same command with resume={display(outcome.sweep_dir)}"
         lines.append(
             f"  jobs may still be running (submitit); when they are done: {again}"

@@ -97,12 +97,14 @@ class MlflowCallback(Callback):
         return (Path.cwd() / DEFAULT_STORE).resolve().as_uri()
 
     def client(self):
+        from compliant_docking.extras import MissingExtra, require
+
         try:
-            from mlflow.tracking import MlflowClient
-        except ImportError:
-            raise TrackingUnavailable(
-                "+tracking=mlflow needs MLflow: pip install -e '.[tracking]' (mlflow-skinny)"
-            ) from None
+            require("tracking", "mlflow.tracking")
+        except MissingExtra as exc:
+            raise TrackingUnavailable(str(exc)) from None
+        from mlflow.tracking import MlflowClient
+
         uri = self.uri or self.resolve_uri()
         if uri.startswith("file:") or "://" not in uri:
             os.environ.setdefault("MLFLOW_ALLOW_FILE_STORE", "true")  # MLflow 3: maintenance mode

@@ -4,7 +4,7 @@
   along the top edge, and the best value so far (one panel per objective value);
 - :func:`plot_pareto`: two objectives against each other, the Pareto front joined.
 
-Each is saved as PNG and PDF in the SciencePlots style of the run figures.
+Each is saved as PNG and PDF in the style of the run figures (viz/plotting.py).
 """
 
 from __future__ import annotations

@@ -100,12 +100,13 @@ class TuningSweeper(Sweeper):
 
     def _plan(self, arguments: list[str], sweep_dir: Path) -> dict:
         """Everything the loop needs, checked before any job runs; prints the header."""
+        from compliant_docking.extras import MissingExtra, require
         from compliant_docking.run.rundir import MULTIRUN_FILE
 
         try:
-            import optuna  # noqa: F401
-        except ImportError:
-            raise ValueError("hydra/sweeper=optuna needs Optuna: pip install -e '.[tune]'") from None
+            require("tune", "optuna")
+        except MissingExtra as exc:
+            raise ValueError(str(exc)) from None
         if self.n_trials < 1 or self.parallel_trials < 1:
             raise ValueError(
                 f"hydra.sweeper.n_trials ({self.n_trials}) and hydra.sweeper.parallel_trials "

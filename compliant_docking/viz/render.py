@@ -21,9 +21,11 @@ Each frame (``render.width`` × ``render.height`` pixels, rounded down to even n
   count, beside the axial force over the whole run (grey ahead of the cursor, blue
   behind it, the gate's force budget dashed).
 
-Encoding: H.264 (yuv420p, ``render.crf``) through PyAV, which ships its own FFmpeg; the
-file is written under a temporary name and renamed. Offscreen OpenGL comes from the
-backend chosen by compliant_docking/gl.py before mujoco was imported.
+Encoding: H.264 (yuv420p, ``render.crf``) through PyAV, which ships its own FFmpeg (the
+``video`` extra, with Pillow for the overlay); the file is written under a temporary name
+and renamed. Offscreen OpenGL: the backend compliant_docking/gl.py chooses when the video
+starts; the context is made from that backend's class (:func:`gl.context_class`), not by
+``mujoco.Renderer``, whose backend was fixed when the run imported mujoco.
 """
 
 from __future__ import annotations
@@ -37,7 +39,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-from compliant_docking import gl
+from compliant_docking import extras, gl
 from compliant_docking.sim.telemetry import axial_force
 from compliant_docking.viz.video_parts import Encoder, ForceStrip, Labels
 
@@ -190,6 +192,11 @@ def write_video(
             f"render.width × render.height = {options.width} × {options.height} "
             f"is too small (at least 64 × {48 + strip_h} px)"
         )
+    try:
+        extras.require("video", "av", "PIL")
+    except extras.MissingExtra as exc:
+        raise RenderError(str(exc)) from None
+    gl.configure()
     if not gl.offscreen_possible():
         raise RenderError(gl.no_backend_message("no display and no headless backend"))
 
@@ -273,7 +280,7 @@ class _Views:
             self.free = self._closeup_camera(focus, tool_body, float(options.closeup_distance))
             self.labels.append("close-up: socket mouth" if focus is not None else "close-up: tool")
         try:  # last: nothing after it may fail and leave the GL context open
-            self.renderer = mujoco.Renderer(self.model, height, view_w)
+            self.renderer = Offscreen(self.model, height, view_w)
         except Exception as exc:  # the GL backend could not make a context
             raise RenderError(gl.no_backend_message(f"{type(exc).__name__}: {exc}".strip())) from None
         self.renderer.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = bool(options.shadows)
@@ -314,3 +321,52 @@ class _Views:
 
     def close(self) -> None:
         self.renderer.close()
+
+
+class Offscreen:
+    """What ``mujoco.Renderer`` does for an RGB image (the same MuJoCo calls), with the GL
+    context made from the backend chosen now (:func:`gl.context_class`)."""
+
+    def __init__(self, model: mujoco.MjModel, height: int, width: int):
+        self.model = model
+        self.context = gl.context_class()(width, height)
+        self.mjr = None
+        try:
+            self.context.make_current()
+            self.scene = mujoco.MjvScene(model=model, maxgeom=10000)
+            self.mjr = mujoco.MjrContext(model, mujoco.mjtFontScale.mjFONTSCALE_150.value)
+            mujoco.mjr_setBuffer(mujoco.mjtFramebuffer.mjFB_OFFSCREEN.value, self.mjr)
+            self.mjr.readDepthMap = mujoco.mjtDepthMap.mjDEPTH_ZEROFAR
+        except BaseException:
+            self.close()
+            raise
+        self.rect = mujoco.MjrRect(0, 0, width, height)
+        self.shape = (height, width, 3)
+
+    def update_scene(self, data: mujoco.MjData, camera: int | mujoco.MjvCamera, scene_option) -> None:
+        """The scene seen from ``camera`` (a camera id of the model, or a free camera)."""
+        if not isinstance(camera, mujoco.MjvCamera):
+            camera_id, camera = int(camera), mujoco.MjvCamera()
+            camera.type = mujoco.mjtCamera.mjCAMERA_FIXED
+            camera.fixedcamid = camera_id
+        mujoco.mjv_updateScene(
+            self.model, data, scene_option, None, camera, mujoco.mjtCatBit.mjCAT_ALL.value, self.scene
+        )
+
+    def render(self) -> np.ndarray:
+        """The image of the last scene: (height, width, 3) uint8, a fresh array, top row first."""
+        self.context.make_current()
+        image = np.empty(self.shape, dtype=np.uint8)
+        mujoco.mjr_render(self.rect, self.scene, self.mjr)
+        mujoco.mjr_readPixels(image, None, self.rect, self.mjr)
+        image[:] = np.flipud(image)  # OpenGL's rows start at the bottom
+        return image
+
+    def close(self) -> None:
+        if self.mjr is not None:
+            self.context.make_current()
+            self.mjr.free()
+            self.mjr = None
+        if self.context is not None:
+            self.context.free()
+            self.context = None

@@ -13,9 +13,9 @@ in parallel) and without a display. Mouse perturbations in the window (double-cl
 body, Ctrl + drag) push the arm for real: they are part of the physics and of the
 results.
 
-The window needs GLFW; compliant_docking/gl.py leaves MUJOCO_GL unset (GLFW) whenever a
-display is present, so the offscreen video (``render=video``) and the viewer can be
-used together.
+The window needs GLFW; compliant_docking/gl.py, whose choice the viewer makes when it
+opens, keeps GLFW whenever a display is present, so the offscreen video
+(``render=video``) and the viewer can be used together.
 """
 
 from __future__ import annotations
@@ -83,6 +83,7 @@ class RealTimeViewer:
         clock: Callable[[], float] = time.perf_counter,
         sleep: Callable[[float], None] = time.sleep,
     ):
+        gl.configure()  # before mujoco.viewer, in case nothing imported mujoco yet
         if launch is None:
             import mujoco.viewer
 

@@ -1,4 +1,4 @@
-"""A plain-numpy evaluation of HQP-AC's per-step closed-form path (CONTROL_LAWS.md §2),
+"""A plain-numpy evaluation of HQP-AC's per-step closed-form path (docs/control_laws.md §2),
 written from the law (numpy.linalg, no LAPACK shortcuts, no compiled code): the reference
 the compiled step kernel (control/hqp/kernel.py) is checked against.
 

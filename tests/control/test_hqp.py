@@ -1,7 +1,7 @@
 """HQP-AC (controller=hqp): the law's pieces, the constraints in simulation, docking.
 
 Tolerances are stated where they are used; every assertion is about the physics or the
-maths of CONTROL_LAWS.md §2, and each can fail.
+maths of docs/control_laws.md §2, and each can fail.
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""The generalised-momentum observer (compliant_docking/controllers/observer.py).
+"""The generalised-momentum observer (compliant_docking/control/observer.py).
 
 A known constant wrench is pushed on the tool with ``xfrc_applied`` (moved from the TCP
 to the tool's centre of mass, where MuJoCo applies it); the observer must report it

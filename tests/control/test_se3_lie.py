@@ -1,4 +1,4 @@
-"""``controller=se3_lie``: the law against a literal transcription of CONTROL_LAWS.md §3,
+"""``controller=se3_lie``: the law against a literal transcription of docs/control_laws.md §3,
 the world → body conversions by finite differences, and closed-loop physics.
 
 Tolerances:
@@ -65,7 +65,7 @@ def controller(sim, **kwargs):
 
 
 def literal_law(arm, ref, wrench, A, D, K, b, F_d):
-    """CONTROL_LAWS.md §3 transcribed with dense numpy, Pinocchio's SE(3) helpers and lie's dexp
+    """docs/control_laws.md §3 transcribed with dense numpy, Pinocchio's SE(3) helpers and lie's dexp
     (explicit inverses)."""
     R, p = arm.rot.copy(), arm.pos.copy()
     Rd, pd = ref.rot, ref.pos

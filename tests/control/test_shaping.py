@@ -1,4 +1,4 @@
-"""The apparent-inertia floor (issue 10; docs/controllers/impedance.md): what it does to the
+"""The apparent-inertia floor (docs/controllers/impedance.md): what it does to the
 delayed force-feedback loop, that it leaves the static compliance alone, and the limit cycle
 it removes on a held contact."""
 

@@ -1,7 +1,7 @@
 """Free-space push responses against the closed loop each control law promises.
 
 A constant wrench w is pushed on the tool at the TCP (world axes) from t = 0. With exact
-force feedback the impedance laws close to W ë + D ė + K e = w per axis (CONTROL_LAWS.md
+force feedback the impedance laws close to W ë + D ė + K e = w per axis (docs/control_laws.md
 §1, §3: W = diag(m, m_rot), D, K their gains), and HQP-AC to Λ ë + D_r ė + K_r e = w with
 K_r = s(‖w‖)·K0 (the sigmoid law) and D_r = Λ^½K_r^½ + K_r^½Λ^½ (§2). The expected motion
 of every axis is that linear ODE's solution (a matrix exponential), with two facts of the

@@ -1,5 +1,5 @@
 """Contact metrics on synthetic time series (first contact, first strike, make/break events),
-and the docking gate's calm-hold items and failure reasons (issue 10)."""
+and the docking gate's calm-hold items and failure reasons."""
 
 import numpy as np
 import pandas as pd

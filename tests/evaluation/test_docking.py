@@ -1,5 +1,5 @@
 """Docking metrics, seat state and the docking gate on synthetic time series whose answers
-are known in closed form (CONTROL_LAWS.md §5).
+are known in closed form (docs/control_laws.md §5).
 
 Every expected value below is written from the construction of the series, not recomputed
 with the formula under test. The series are piecewise constant, so each statistic has an

@@ -31,7 +31,7 @@ def test_table_equals_sample(make):
 
 
 # --------------------------------------------------------------------------- configs
-#: each planner's defaults as CONTROL_LAWS.md §4 states them (Table 8 for se3topp)
+#: each planner's defaults as docs/control_laws.md §4 states them (Table 8 for se3topp)
 SPEC_DEFAULTS = {
     "quintic": dict(duration=15.0),
     "twophase": dict(

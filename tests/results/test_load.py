@@ -325,14 +325,16 @@ def test_sweeps_named_otherwise_are_dated_by_their_multirun_yaml(tmp_path):
     assert newest_sweep(tmp_path) == later
 
 
-def test_locate_runs_reads_relative_paths_from_the_repository_root(tmp_path, monkeypatch):
-    from compliant_docking import REPO_ROOT
+def test_locate_runs_reads_relative_paths_from_the_working_directory_then_the_base(tmp_path, monkeypatch):
     from compliant_docking.results import locate_runs
+    from tests.helpers import REPO_ROOT
 
     monkeypatch.chdir(tmp_path)  # like a notebook running in analysis/
-    assert locate_runs("conf") == (REPO_ROOT / "conf").resolve()
-    (tmp_path / "only-here").mkdir()
-    assert locate_runs("only-here") == (tmp_path / "only-here").resolve()  # the working directory next
+    assert locate_runs("conf", base=REPO_ROOT) == (REPO_ROOT / "conf").resolve()
+    (tmp_path / "conf").mkdir()
+    assert locate_runs("conf", base=REPO_ROOT) == (tmp_path / "conf").resolve()  # the working directory first
     assert locate_runs(tmp_path) == tmp_path.resolve()
     with pytest.raises(FileNotFoundError, match="no directory 'runs/multirun/nope'"):
-        locate_runs("runs/multirun/nope")
+        locate_runs("runs/multirun/nope", base=REPO_ROOT)
+    with pytest.raises(FileNotFoundError, match="no directory 'assets'"):
+        locate_runs("assets")  # without a base: the working directory only

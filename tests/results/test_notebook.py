@@ -12,9 +12,8 @@ from pathlib import Path
 
 import pytest
 
-from compliant_docking import REPO_ROOT
+from tests.helpers import REPO_ROOT, sweep_cli
 from tests.helpers import SHORT_SWEEP as SHORT
-from tests.helpers import sweep_cli
 
 nbformat = pytest.importorskip("nbformat")
 nbclient = pytest.importorskip("nbclient")

@@ -9,10 +9,9 @@ import sys
 
 import pytest
 
-from compliant_docking import REPO_ROOT
 from compliant_docking.results.report import main as report
 from compliant_docking.run.runner import execute
-from tests.helpers import make_cfg
+from tests.helpers import REPO_ROOT, make_cfg
 
 
 def _truncate(path) -> None:

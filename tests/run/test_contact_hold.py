@@ -1,4 +1,4 @@
-"""Held contact without chatter, in zero and in Earth gravity (issue 10).
+"""Held contact without chatter, in zero and in Earth gravity (docs/held_contact.md).
 
 The calm criterion is the issue's: at most 5 contact make/break events per second and a
 force standard deviation of at most max(0.5 N, 20 % of the mean) over the last 2 s.
@@ -37,7 +37,7 @@ def test_fr3_holds_the_plug_calmly_with_its_default_gains(controller, physics):
 def test_every_robot_controller_and_planner_docks_and_holds_calmly(
     tmp_path, robot, controller, physics, trajectory
 ):
-    """Issue 10's requirement, on the full default docking run: docked (the gate, which now
+    """The calm hold, on the full default docking run: docked (the gate, which now
     includes the calm-hold items), and over the last 2 s at most 5 make/break events per
     second and |F| std ≤ max(0.5 N, 20 % of the mean) — asserted here directly as well, so
     a change of the gate's thresholds cannot hide a bounce."""

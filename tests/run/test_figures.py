@@ -11,9 +11,8 @@ import textwrap
 import pytest
 from omegaconf import OmegaConf
 
-from compliant_docking import REPO_ROOT
 from compliant_docking.run.figures import wanted
-from tests.helpers import SHORT_SWEEP
+from tests.helpers import REPO_ROOT, SHORT_SWEEP
 
 
 @pytest.mark.parametrize(

@@ -16,12 +16,11 @@ import mujoco
 import pandas as pd
 import pytest
 
-from compliant_docking import REPO_ROOT
 from compliant_docking.run import files, rundir
 from compliant_docking.run.runner import execute
 from compliant_docking.run.summary import format_summary
 from compliant_docking.sim import mjlog
-from tests.helpers import make_cfg
+from tests.helpers import REPO_ROOT, make_cfg
 
 
 # --------------------------------------------------------------------------- signals

@@ -17,11 +17,10 @@ import pandas as pd
 import pytest
 from omegaconf import OmegaConf
 
-from compliant_docking import REPO_ROOT
 from compliant_docking.results import load_runs
 from compliant_docking.run import provenance
 from compliant_docking.run.runner import execute
-from tests.helpers import make_cfg
+from tests.helpers import REPO_ROOT, make_cfg
 
 SHORT = ("task.progress=false", "trajectory.duration=1", "task.settle_time=1")
 PROVENANCE_KEYS = (

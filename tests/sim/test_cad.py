@@ -11,7 +11,6 @@ import mujoco
 import numpy as np
 import pytest
 
-from compliant_docking import REPO_ROOT
 from compliant_docking.config.store import default_keyed
 from compliant_docking.interface import QUICK as QUICK_SEARCH
 from compliant_docking.interface import export_keyed, main
@@ -23,7 +22,7 @@ from compliant_docking.sim.geometry.fragment import Key, read_key
 from compliant_docking.sim.geometry.keyed import keyed_plug_inertia, keyed_socket_pieces
 from compliant_docking.sim.geometry.mesh import keyed_cad_pair
 from compliant_docking.sim.scene import build_scene
-from tests.helpers import make_cfg
+from tests.helpers import REPO_ROOT, make_cfg
 
 pytest.importorskip("coacd", reason="the CAD converter needs the 'cad' extra (pip install -e '.[cad]')")
 pytest.importorskip("trimesh", reason="the CAD converter needs the 'cad' extra (pip install -e '.[cad]')")

@@ -19,7 +19,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from compliant_docking import REPO_ROOT
+from tests.helpers import REPO_ROOT
 from compliant_docking.config.store import default_interface, default_keyed
 from compliant_docking.sim.geometry import build_plug, build_socket
 from compliant_docking.sim.geometry.audit import Audit, ContactSample, Tilt, cavity_surface, mesh_surface

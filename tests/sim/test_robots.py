@@ -92,12 +92,13 @@ def test_fr3_docks_the_default_scene(tmp_path, controller, friction_comp):
 
 
 @pytest.mark.parametrize("controller", ["impedance", "se3_lie"])
-def test_fr3_velocity_mode_lands_on_the_funnel_and_strikes_over_the_budget(tmp_path, controller):
+def test_fr3_velocity_mode_lands_on_the_funnel_off_the_axis(tmp_path, controller):
     """Why the FR3's feed-forward follows the command (docs/controllers/friction.md): in
     velocity mode the joints stick while they are at rest (a dead zone), so the heavier
     floored arm lags its reference sideways and lands on the funnel ~5 mm off the axis
-    (measured 5.4 mm), striking it at 64-69 N: seated, but over the 50 N budget, and the
-    verdict says so."""
+    (measured 5.0 mm), striking it at 65-70 N per step (raw). The strike is short: its
+    filtered peak (the 50 ms mean the gate judges) is about 7 N, so the funnel guides the
+    plug home and the run docks; the torque modes arrive on the axis instead."""
     record = execute(
         make_cfg(
             "robot=fr3",
@@ -110,6 +111,6 @@ def test_fr3_velocity_mode_lands_on_the_funnel_and_strikes_over_the_budget(tmp_p
         echo=False,
     )
     assert record["first_contact_lateral_offset_m"] > 2e-3  # on the funnel, not the bore
-    assert record["first_strike_force_N"] > 50.0
-    assert record["success"] is False
-    assert record["gate_verdict"].startswith("seated; peak force ")
+    assert record["first_strike_force_N"] > 50.0  # the raw per-step strike
+    assert record["filtered_peak_axial_force_N"] < 0.25 * record["first_strike_force_N"]
+    assert record["success"] is True, record["gate_failures"]

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pytest
 
-from compliant_docking import REPO_ROOT
+from tests.helpers import REPO_ROOT
 
 #: 3 short jobs (free space, 2 s simulated); the third fails: its start is out of reach, a
 #: failure only the run finds (a value the config check refuses, e.g. a zero duration,

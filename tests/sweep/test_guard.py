@@ -16,10 +16,9 @@ import psutil
 import pytest
 from omegaconf import OmegaConf
 
-from compliant_docking import REPO_ROOT
 from compliant_docking.cli import main
 from compliant_docking.sweep import guard
-from tests.helpers import SHORT_SWEEP
+from tests.helpers import REPO_ROOT, SHORT_SWEEP
 
 #: short single runs: 1 s of motion, 1 s of settling
 SHORT_RUN = ("trajectory.duration=1", "task.settle_time=1", "task.progress=false")

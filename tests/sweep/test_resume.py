@@ -18,13 +18,12 @@ import pandas as pd
 import pytest
 from omegaconf import OmegaConf
 
-from compliant_docking import REPO_ROOT
 from compliant_docking.results import RunSkippedWarning, load_runs
 from compliant_docking.run.provenance import config_hash
 from compliant_docking.run.runner import execute
 from compliant_docking.sweep import resume, summary
 from compliant_docking.sweep.session import SweepSession
-from tests.helpers import make_cfg
+from tests.helpers import REPO_ROOT, make_cfg
 
 #: 6 short free-space jobs (2-4.5 s simulated each, about 2 s of wall time with figures)
 SWEEP_ARGS = (

@@ -34,6 +34,10 @@ def recomputed(sweep_dir, trial, metric: str) -> float:
     return 1000.0 * (1 + bad / len(records))
 
 
+@pytest.mark.slow  # 1-2.5 min: the same properties, in-process, are proved fast by
+# tests/tune/test_sweeper.py (trials scored, penalised and written with the best gains; a rerun
+# resumes the study; Pareto fronts) and tests/sweep/test_callback.py (the tune preset composes;
+# its expected jobs are trials × draws); this runs them through the real command and launcher
 def test_a_small_study_finishes_writes_the_best_gains_and_resumes(sweep_dir):
     sweep = sweep_dir
     first = sweep_cli(sweep, *SHORT_TUNE, "hydra.sweeper.n_trials=4")

@@ -1,4 +1,4 @@
-"""render=video (compliant_docking/render.py) and the OpenGL backend choice (gl.py)."""
+"""render=video (compliant_docking/viz/render.py) and the OpenGL backend choice (gl.py)."""
 
 from __future__ import annotations
 
@@ -11,10 +11,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from compliant_docking import REPO_ROOT, gl
+from compliant_docking import gl
 from compliant_docking.run.runner import execute
 from compliant_docking.viz.render import VIDEO_FILE, frame_count, frame_rows
-from tests.helpers import make_cfg
+from tests.helpers import REPO_ROOT, make_cfg
 
 #: a short run at a low resolution: 1.5 s at 10 frames per second → 15 frames
 SHORT = (
@@ -207,19 +207,15 @@ def test_display_detection_off_linux():
     assert gl.has_display({}, "darwin") and gl.has_display({}, "win32")
 
 
-def _import_in_subprocess(env: dict, code: str = "") -> dict:
-    script = (
-        code + "\nimport json, os, compliant_docking, compliant_docking.gl as g\n"
-        "print(json.dumps({'MUJOCO_GL': os.environ.get('MUJOCO_GL'), "
-        "'source': g.decision().source, 'too_late': g.too_late()}))"
-    )
+def _in_subprocess(env: dict, code: str) -> dict:
+    """Run ``code`` in a fresh interpreter; the JSON it prints last."""
     out = subprocess.run(
-        [sys.executable, "-c", script],
+        [sys.executable, "-c", code],
         cwd=REPO_ROOT,
         env=env,
         capture_output=True,
         text=True,
-        timeout=60,
+        timeout=180,
         check=True,
     )
     return json.loads(out.stdout.strip().splitlines()[-1])
@@ -233,22 +229,52 @@ def _clean_env() -> dict:
     }
 
 
-def test_import_sets_the_backend_once_and_respects_the_user():
+_CHOICE = (
+    "import json, os, sys\n{first}\nimport compliant_docking, compliant_docking.cli, compliant_docking.gl as g\n"
+    "at_import = os.environ.get('MUJOCO_GL')\n"
+    "d = g.configure()\n"
+    "print(json.dumps({{'at_import': at_import, 'MUJOCO_GL': os.environ.get('MUJOCO_GL'), "
+    "'source': d.source, 'backend': d.backend, 'context': {context}}}))"
+)
+_CONTEXT = "g.context_class().__module__"
+
+
+def test_import_has_no_side_effect_and_the_backend_is_chosen_when_rendering_starts():
     env = _clean_env()
     expected = gl.choose(env, display=False)  # the real probes of this machine
-    assert _import_in_subprocess(env) == {
+    module = {"egl": "mujoco.egl", "osmesa": "mujoco.osmesa", None: "mujoco.glfw"}[expected.backend]
+    # importing the package (and the command line) leaves the environment alone; the
+    # choice, made when rendering starts, is exported while mujoco is not imported yet
+    assert _in_subprocess(env, _CHOICE.format(first="", context=_CONTEXT)) == {
+        "at_import": None,
         "MUJOCO_GL": expected.backend,
         "source": expected.source,
-        "too_late": False,
+        "backend": expected.backend,
+        "context": module,
     }
-    assert _import_in_subprocess({**env, "MUJOCO_GL": "osmesa"}) == {
-        "MUJOCO_GL": "osmesa",
-        "source": "user",
-        "too_late": False,
-    }
-    # mujoco imported first: too late to choose; nothing is changed, and messages say so
-    late = _import_in_subprocess(env, "import mujoco")
-    assert late["MUJOCO_GL"] is None and late["too_late"] is True
+    # the user's choice is kept (not imported here: its libraries may be missing)
+    user = _in_subprocess({**env, "MUJOCO_GL": "osmesa"}, _CHOICE.format(first="", context="None"))
+    assert (user["MUJOCO_GL"], user["source"], user["backend"]) == ("osmesa", "user", "osmesa")
+    # mujoco imported first (as the loop does before a video): MUJOCO_GL is not exported
+    # (too late for mujoco's own binding), but the renderer's context is the chosen backend's
+    late = _in_subprocess(env, _CHOICE.format(first="import mujoco", context=_CONTEXT))
+    assert late["MUJOCO_GL"] is None and late["backend"] == expected.backend and late["context"] == module
+
+
+def test_a_video_renders_when_mujoco_was_imported_before_the_choice(tmp_path):
+    """MuJoCo 4.0 binds mujoco.Renderer's backend at its import: with MUJOCO_GL unset and no
+    display that is GLFW, which cannot make a context; the video's own context is the
+    chosen backend's, so the video is made all the same."""
+    _need_offscreen_gl()
+    code = f"""
+import json, mujoco
+from pathlib import Path
+from compliant_docking.config import load_config
+from compliant_docking.run.runner import execute
+record = execute(load_config(*{SHORT!r}), Path({str(tmp_path)!r}), figures=False, echo=False)
+print(json.dumps({{"error": record["video_error"], "frames": record["video_frames"]}}))
+"""
+    assert _in_subprocess(_clean_env(), code) == {"error": None, "frames": 15}
 
 
 def test_a_diverged_log_renders_up_to_the_last_finite_pose(tmp_path):

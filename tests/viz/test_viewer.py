@@ -1,4 +1,4 @@
-"""viewer=true (compliant_docking/viewer.py) and the loop's per-step hook."""
+"""viewer=true (compliant_docking/viz/viewer.py) and the loop's per-step hook."""
 
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
 """HQP-AC's compliance law: contact magnitude, adaptive stiffness (Eq. 26-27), the damping
-designs (Eq. 29 and the modal fallback) and the preload ramp (CONTROL_LAWS.md §2)."""
+designs (Eq. 29 and the modal fallback) and the preload ramp (docs/control_laws.md §2)."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
 """``controller=hqp``: HQP-AC, a hierarchical QP with adaptive compliance.
 
-CONTROL_LAWS.md §2 (Ren & Shan 2026, Acta Astronautica, §3.2); docs/controllers/hqp.md.
+docs/control_laws.md §2 (Ren & Shan 2026, Acta Astronautica, §3.2); docs/controllers/hqp.md.
 Decision variable: the joint acceleration q̈. Per control step, with the wrench w = [f; m]
 on the tool at the TCP (world axes; the sensor's or the momentum observer's):
 
@@ -55,7 +55,7 @@ from compliant_docking.planning.base import Reference
 from compliant_docking.sim.context import ControlContext
 from compliant_docking.sim.models import ArmModel
 
-#: Tikhonov regulariser of the level-1 Hessian (CONTROL_LAWS.md §2)
+#: Tikhonov regulariser of the level-1 Hessian (docs/control_laws.md §2)
 REGULARISER = 1e-8
 #: stand-in for an infinite bound (ProxQP wants finite numbers)
 BIG = 1e20

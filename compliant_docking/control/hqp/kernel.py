@@ -35,7 +35,7 @@ W_FLOOR, W_MAX_COND, W_SINGULAR, W_FAST = 4, 5, 6, 7  # counters and the largest
 W_F, W_S, W_W, W_SQRT_S, W_INTEGRAL = 8, 9, 10, 11, 12  # F, s, w, √s, F_i (3)
 W_I_STATE, W_I_FROZEN, W_I_MAX = 15, 18, 19  # the integral's ∫P e dt (3), frozen steps, max ‖F_i‖
 N_SCALARS = 20
-#: contact magnitude above which the preload ramps up [N] (CONTROL_LAWS.md §2)
+#: contact magnitude above which the preload ramps up [N] (docs/control_laws.md §2)
 PRELOAD_CONTACT_N = 1.0
 #: contact magnitude below which the contact counts as lost again [N] (hysteresis)
 PRELOAD_RELEASE_N = 0.5

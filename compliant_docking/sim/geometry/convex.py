@@ -92,18 +92,11 @@ def coacd_version() -> str | None:
 
 
 def require_cad_extra() -> None:
-    """Raise ImportError with the install command when coacd or trimesh is missing."""
-    missing = []
-    for module in ("coacd", "trimesh"):
-        try:
-            __import__(module)
-        except ImportError:
-            missing.append(module)
-    if missing:
-        raise ImportError(
-            f"the CAD converter needs {' and '.join(missing)} (the optional 'cad' extra): "
-            "pip install -e '.[cad]' (or .venv/bin/pip install coacd trimesh)"
-        )
+    """Raise ImportError (:class:`~compliant_docking.extras.MissingExtra`) naming the ``cad``
+    extra when coacd or trimesh is missing."""
+    from compliant_docking.extras import require
+
+    require("cad", "coacd", "trimesh")
 
 
 def decompose(

@@ -1,6 +1,9 @@
-"""Issue 10 investigation helpers: run one configuration in-process, optionally with a
-modified wrench path (extra delay, a first-order low-pass), and report the steady-window
-contact statistics exactly as /work/shared/tools/steady_window.py computes them."""
+"""Run one configuration in-process, optionally with a modified wrench path (extra delay,
+a first-order low-pass), and report the steady-window contact statistics: make/break events
+per second and the mean, spread and maximum of |f| over the last 2 s (README.md).
+
+    python analysis/held_contact/probe.py [overrides ...]
+"""
 from __future__ import annotations
 
 import sys

@@ -1,16 +1,17 @@
-"""Issue 10: time-domain experiments on the held contact (steady window, last 2 s).
+"""Time-domain experiments on the held contact (steady window, last 2 s).
 
-Each line: the overrides / wrench-path change, calm or CHATTER (the issue's criterion:
+Each line: the overrides / wrench-path change, calm or CHATTER (the calm-hold
+criterion of the docking gate:
 ≤ 5 make/break events/s and |F| std ≤ max(0.5 N, 20 % of the mean)), events per second,
 |F| mean ± std and max over the last 2 s, the peak axial force over the run, the tip's
 final depth and lateral error against the true seat, and whether the docking gate's seat
 and force items hold.
 
-Every configuration starts from the laws and defaults as they were before issue 10
-(commit 840181b: no apparent-inertia floor, torque-mode friction feed-forward, no integral
-action, HQP's euclidean null-space metric), then changes what its label says.
+Every configuration starts from the laws without the held-contact fixes (no
+apparent-inertia floor, torque-mode friction feed-forward, no integral action, HQP's
+euclidean null-space metric: spec()), then changes what its label says.
 
-    python analysis/issue10/experiments.py [group ...]     # all groups: ~5 min on 2 cores
+    python analysis/held_contact/experiments.py [group ...]     # all groups: ~5 min on 2 cores
 """
 from __future__ import annotations
 
@@ -22,7 +23,7 @@ from probe import fmt, run  # noqa: E402
 
 
 def spec(controller="impedance"):
-    """Overrides restoring the pre-issue-10 law and defaults for a controller."""
+    """Overrides giving a controller the law and defaults without the held-contact fixes."""
     common = ("controller.friction_comp=torque", "controller.integral_gain=0")
     if controller == "hqp":
         return ("controller=hqp", *common, "controller.null_space_metric=euclidean")
@@ -42,7 +43,7 @@ def mass(m):
 
 
 GROUPS = {
-    # is it the force feedback? (CONTROL_LAWS' candidates 1-3)
+    # is it the force feedback? (with it off the law is pure motion control)
     "feedback": [(fr3(), {}), (fr3("impedance", "controller.use_force_feedback=false"), {}),
                  (fr3("se3_lie"), {}), (fr3("se3_lie", "controller.use_force_feedback=false"), {}),
                  (fr3("hqp"), {})],

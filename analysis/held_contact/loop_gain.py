@@ -1,4 +1,4 @@
-"""Issue 10: the one-step force-feedback loop, linearised at a seated state.
+"""The one-step force-feedback loop, linearised at a seated state.
 
 For a robot and controller, take the seated state at the end of a calm run (force
 feedback off), then:
@@ -11,10 +11,11 @@ feedback off), then:
    controller (finite differences of the wrench handed to compute()), and its spectral
    radius: > 1 means the measured wrench, fed back one step late, grows from step to step.
 
-    python analysis/issue10/loop_gain.py                      # the table of the notes
-    python analysis/issue10/loop_gain.py robot=fr3 controller.m=5 ...   # one configuration
+    python analysis/held_contact/loop_gain.py                      # the table (results/loop_gain.md)
+    python analysis/held_contact/loop_gain.py robot=fr3 controller.m=5 ...   # one configuration
 
-Configurations start from the pre-issue-10 law (experiments.spec()), then the overrides.
+Configurations start from the laws without the held-contact fixes (experiments.spec()),
+then the overrides.
 """
 from __future__ import annotations
 
@@ -115,7 +116,7 @@ def report(overrides):
 
 if __name__ == "__main__":
     sys.path.insert(0, __file__.rsplit("/", 1)[0])
-    print("| configuration (pre-issue law + …) | Λ_u [kg] | m [kg] | d·|min(Λ_u/m, 1/floor) − 1| | most negative eigenvalue | spectral radius |")
+    print("| configuration (laws without the fixes + …) | Λ_u [kg] | m [kg] | d·|min(Λ_u/m, 1/floor) − 1| | most negative eigenvalue | spectral radius |")
     print("|---|---|---|---|---|---|")
     for overrides in ([sys.argv[1:]] if len(sys.argv) > 1 else TABLE):
         report(list(overrides))

@@ -1,0 +1,41 @@
+"""Session set-up shared by every test."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+#: compile one law's numba kernel (control/jit.py) by running a few steps of it
+_WARM = (
+    "import sys\n"
+    "from compliant_docking.config import load_config\n"
+    "from compliant_docking.sim.simulate import prepare\n"
+    "prepare(load_config(f'controller={sys.argv[1]}', 'task.duration=0.005', 'task.progress=false')).run()\n"
+)
+
+
+def pytest_configure(config) -> None:
+    """Compile the compiled laws' kernels once, before pytest-xdist starts its workers.
+
+    numba caches a kernel's machine code on first use (``__pycache__``), but on a fresh
+    clone every process that reaches se3_lie or hqp before the cache exists compiles them
+    itself: each xdist worker, and each command-line run and sweep worker the tests start
+    (20-75 s for hqp on a shared 2-core machine). Here the two kernels compile side by
+    side in two processes and every later process loads them. Only for a distributed run
+    (``-n``): a single targeted test pays nothing when the cache is warm.
+    """
+    if hasattr(config, "workerinput") or config.getoption("collectonly", False):
+        return  # an xdist worker (the controller did it), or nothing will run
+    workers = config.getoption("numprocesses", None)
+    if not workers:
+        return
+    procs = [
+        subprocess.Popen(
+            [sys.executable, "-c", _WARM, law], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE
+        )
+        for law in ("hqp", "se3_lie")
+    ]
+    for proc in procs:
+        _, err = proc.communicate(timeout=900)
+        if proc.returncode:  # the tests of that law will report it; say why here too
+            sys.stderr.write(f"compiling a kernel before the workers failed:\n{err.decode()[-2000:]}\n")
