@@ -105,7 +105,7 @@ def test_no_comparison_without_two_controllers():
 def test_summary_says_in_words_what_is_significant_and_what_is_not():
     text = summary_markdown(frame(10, controllers=("impedance", "hqp", "se3_lie")), "t")
     words = text.split("## Paired comparisons", 1)[1].split("### ", 1)[0]
-    force = words.split("- **peak axial force [N]**", 1)[1].split("\n- ", 1)[0].splitlines()
+    force = words.split("- **peak axial force (raw, per step) [N]**", 1)[1].split("\n- ", 1)[0].splitlines()
     assert force[0] == ", 3 comparisons: 2 significant at 5 %:"
     assert force[1].startswith("  - hqp − impedance: ") and force[2].startswith("  - se3_lie − hqp: ")
     assert force[3].startswith("  - not significant (1): se3_lie − impedance")  # the same strikes
@@ -118,7 +118,7 @@ def test_the_table10_comparison_turns_beyond_six_configurations():
     df = frame(2, robots=("iiwa14", "fr3", "ur5", "ur10"), controllers=("impedance", "hqp"))
     wide = comparison_markdown(comparison_table(df))
     header = next(line for line in wide.splitlines() if line.startswith("| configuration"))
-    assert "peak axial force [N]" in header  # metrics as columns
+    assert "peak axial force (raw, per step) [N]" in header  # metrics as columns
     rows = [line for line in wide.split("**contact safety**")[1].split("**")[0].splitlines() if "·" in line]
     assert len(rows) == 8  # one row per configuration
     narrow = comparison_markdown(comparison_table(frame(2)))

@@ -115,7 +115,7 @@ def test_metric_bars_draw_one_bar_per_configuration(tmp_path, controllers):
     df = runs(tmp_path, repeats=2, controllers=controllers)
     fig = metric_bars(df)
     configurations = len(controllers) * 2 * 2
-    panel = next(ax for ax in fig.axes if ax.get_title() == "peak axial force [N]")
+    panel = next(ax for ax in fig.axes if ax.get_title() == "peak axial force (raw, per step) [N]")
     bars = [b for c in panel.containers if isinstance(c, BarContainer) for b in c]
     assert len(bars) == configurations
     heights = sorted(b.get_height() for b in bars)

@@ -22,6 +22,7 @@ def sweep(n: int = 12, *, effect: bool = True):
             np.arange(is_hqp.sum())
         )
     df["first_strike_force_N"] = df["peak_axial_force_N"] * 0.5
+    df["filtered_peak_axial_force_N"] = df["peak_axial_force_N"] * 0.2
     df["git_commit"], df["git_dirty"] = "abc123", False
     return df
 
@@ -54,7 +55,10 @@ def test_a_real_reduction_is_found_with_its_interval_and_scipys_p(tmp_path):
 def test_no_effect_is_said_to_be_no_significant_difference(tmp_path):
     text = findings_markdown(sweep(12, effect=False), tmp_path)
     assert "**First strike**: no significant difference" in text
-    assert "**Peak axial force**: no significant difference" in text
+    assert "**Peak axial force** (raw, per step): no significant difference" in text
+    assert (
+        "**Filtered peak force** (the " in text and "docking gate judges): no significant difference" in text
+    )
     assert "**not reproduced**" in text  # −81 % lies far outside an interval around 0
 
 

@@ -72,7 +72,7 @@ def test_notebook_runs_top_to_bottom_on_a_sweep(
     assert (sweep / "summary.md").is_file()
     # the console's end: the paired comparison in words (the details are in summary.md)
     assert "paired comparisons (Holm-corrected, 5 %; the rest in summary.md):" in result.stdout
-    assert "- **peak axial force [N]**, 1 comparison: " in result.stdout
+    assert "- **peak axial force (raw, per step) [N]**, 1 comparison: " in result.stdout
 
     # as the sweep prints it: relative to the repository root, while the notebook runs in
     # analysis/ (so the path does not exist from the notebook's working directory)
@@ -100,7 +100,7 @@ def test_notebook_runs_top_to_bottom_on_a_sweep(
     # bootstrap intervals, and the paired test of the two controllers on the same draws
     assert any("success rate [95 % CI]" in t and "hqp" in t for t in tables)
     assert any("mean [95 % CI]" in t and re.search(r"\d \[-?\d", t) for t in tables)
-    assert any("**peak axial force [N]**, 1 comparison:" in t for t in tables)  # in words
+    assert any("**peak axial force (raw, per step) [N]**, 1 comparison:" in t for t in tables)  # in words
     assert any("| hqp − impedance |     3 |" in t and "p Holm" in t for t in tables)  # 3 pairs
 
 

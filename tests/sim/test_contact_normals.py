@@ -19,11 +19,11 @@ import mujoco
 import numpy as np
 import pytest
 
-from tests.helpers import REPO_ROOT
 from compliant_docking.config.store import default_interface, default_keyed
 from compliant_docking.sim.geometry import build_plug, build_socket
 from compliant_docking.sim.geometry.audit import Audit, ContactSample, Tilt, cavity_surface, mesh_surface
 from compliant_docking.sim.geometry.keyed import build_keyed_plug, build_keyed_socket
+from tests.helpers import REPO_ROOT
 
 TOLERANCE_DEG = 5.0
 #: tip heights above the seat for the lateral approach: in the bore, around the lip (the
