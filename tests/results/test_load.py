@@ -200,7 +200,9 @@ def test_comparison_pools_repeats_and_counts_outcomes(tmp_path):
     assert configuration_keys(df) == ["controller"]  # the seed repeats a configuration
     table = comparison_table(df)
     assert list(table.columns) == ["impedance", "hqp"]
-    assert table.loc[("contact safety", "peak axial force (raw, per step) [N]"), "impedance"] == pytest.approx(140.0 / 3)
+    assert table.loc[
+        ("contact safety", "peak axial force (raw, per step) [N]"), "impedance"
+    ] == pytest.approx(140.0 / 3)
     assert table.loc[("tracking accuracy", "position RMS [mm]"), "impedance"] == pytest.approx(1.0)
     assert (
         table.loc[("success", "jobs"), "impedance"] == 4
@@ -209,7 +211,9 @@ def test_comparison_pools_repeats_and_counts_outcomes(tmp_path):
     assert table.loc[("success", "success rate"), "impedance"] == pytest.approx(0.75)
     assert table.loc[("success", "failed"), "hqp"] == 1
     assert table.loc[("success", "success rate"), "hqp"] == 0.0
-    assert np.isnan(table.loc[("contact safety", "peak axial force (raw, per step) [N]"), "hqp"])  # no value: n/a
+    assert np.isnan(
+        table.loc[("contact safety", "peak axial force (raw, per step) [N]"), "hqp"]
+    )  # no value: n/a
     text = comparison_markdown(table)
     assert "**contact safety**" in text and "75 %" in text and "n/a" in text
     assert counts(df).line() == "5 jobs: 3 finished (3 docked, 0 not docked), 2 failed"

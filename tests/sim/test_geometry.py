@@ -24,7 +24,6 @@ from compliant_docking.sim.geometry import (
     plug_hull_vertices,
     plug_inertia,
 )
-from tests.helpers import REPO_ROOT as ROOT
 
 #: the default interface of conf/ (tool=cone_plug, target=cone_socket)
 PLUG, SOCKET, CONTACT = default_interface()
