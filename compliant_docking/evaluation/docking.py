@@ -324,7 +324,7 @@ def docking_gate(
 
 def docking_verdict(seat: SeatState, gate, failures: list[str]) -> str:
     """One line for the console: "docked", or what failed, led by whether the plug is seated
-    (e.g. "seated; peak force 63.6 N over the 50 N budget")."""
+    (e.g. "seated; peak force 63.6 N (filtered) over the 50 N budget")."""
     if not failures:
         return "docked"
     seated = (
