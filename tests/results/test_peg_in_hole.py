@@ -154,7 +154,7 @@ def test_the_bounds_hold_the_measured_comparison_and_no_more(check, column, chan
 
 @pytest.mark.slow
 def test_every_case_agrees_within_the_measured_tolerances():
-    """The full comparison (about 10 minutes on one core): every case's metrics within the
+    """The full comparison (about 2 minutes on one core): every case's metrics within the
     bounds measured over all of them, the quasi-static and timestep checks, and no wedge."""
     metrics = pd.DataFrame([pih.compare(*pih.run_case(c)) for c in pih.CASES])
     assert outside_the_measured_tolerances(metrics) == []
