@@ -1,19 +1,25 @@
 """What each docking interface's collision geometry costs per step in contact, and whether
 it seats: the round cone pair, the keyed pair (boxes), the keyed pair converted from CAD
-(CoACD convex pieces, at several thresholds), and the same CAD pair through MuJoCo's
-mesh SDF collision.
+(convex pieces: the committed example, and CoACD's own and rebuilt pieces at several
+thresholds), and the same CAD pair through MuJoCo's mesh SDF collision.
 
 Run from the repository root (needs the `cad` extra for the conversions)::
 
     python benchmarks/interface_geometry.py                       # about 2 minutes
     python benchmarks/interface_geometry.py --thresholds 0.05,0.025,0.0125   # + CoACD runs
     python benchmarks/interface_geometry.py --round --thresholds 0.05,0.02   # the round pair
+    python benchmarks/interface_geometry.py --fragments OLD_DIR   # + another conversion
+
+`--fragments DIR` (repeatable) adds a directory holding a conversion's tool.xml and
+target.xml, e.g. an older copy of the example, so that old and new are timed in one
+process.
 
 The rig is benchmarks/contact_geometry.py's (the package's compliance rig: a compliant
 carrier pushes the plug with 5 N; zero gravity, 1 ms, implicitfast, elliptic cones). The CAD pair is the keyed
 interface exported as STL (compliant_docking/interface.py --export-keyed) and converted
 with compliant_docking.sim.geometry.cad; `--thresholds` converts at each CoACD threshold
-without refining (so the piece counts differ), the committed example is
+without refining (so the piece counts differ), each in two rows: CoACD's own pieces and the pieces rebuilt as the
+converter does (compliant_docking.sim.geometry.conform). The committed example is
 assets/interfaces/keyed_cad/. `--round` converts the round cone pair instead, exported
 with 64-gon sections (the plug's inscribed in its circle, the bore's faces tangent to
 its cylinder, so the nominal clearance is at least the cone socket's), which CoACD must
@@ -101,6 +107,10 @@ def _fragments_from_dir(directory: Path):
     return make
 
 
+def _pieces(directory: Path) -> int:
+    return sum(1 for g in mujoco.MjSpec.from_file(str(directory / "target.xml")).geoms if "piece" in g.name)
+
+
 def _cone():
     return build_plug(PLUG, CONTACT), build_socket(SOCKET, CONTACT)
 
@@ -131,11 +141,13 @@ def measure(make, case: Case, yaw_deg: float, repeats: int = 3):
     return best, rig.model.ngeom
 
 
-def _pieces_row(pair: str, plug_stl: Path, socket_stl: Path, threshold: float, symmetry: int):
-    """Decompose the socket at ``threshold`` (no refinement), print the clearance check,
-    and return a row whose fragments hold those pieces even if the check fails."""
+def _pieces_rows(pair: str, plug_stl: Path, socket_stl: Path, threshold: float, symmetry: int):
+    """Decompose the socket at ``threshold`` (no refinement) and rebuild the pieces as the
+    converter does; print both clearance checks; return two rows (CoACD's pieces, the
+    rebuilt ones) whose fragments hold those pieces even if a check fails."""
     from compliant_docking.sim.geometry import cad
     from compliant_docking.sim.geometry.clearance import check_clearance
+    from compliant_docking.sim.geometry.conform import ConformSettings, conform
     from compliant_docking.sim.geometry.convex import CoacdSettings, decompose
     from compliant_docking.sim.geometry.fragment import Key
 
@@ -143,22 +155,27 @@ def _pieces_row(pair: str, plug_stl: Path, socket_stl: Path, threshold: float, s
     socket = cad.load_mesh(socket_stl, socket_stl.read_bytes(), 1e-3, "socket")
     t0 = time.perf_counter()
     settings = CoacdSettings(threshold)
-    hulls = decompose(*plug, settings), decompose(*socket, settings)
+    plug_hulls, raw = decompose(*plug, settings), decompose(*socket, settings)
     seconds = time.perf_counter() - t0
-    report = check_clearance(plug, hulls[0], socket, hulls[1])
-    print(
-        f"{pair}, CoACD {threshold:g}: {len(hulls[1])} socket pieces in {seconds:.1f} s; {report.summary()}; "
-        f"{'passes' if report.passed else 'FAILS'} at keep {report.keep}",
-        flush=True,
-    )
+    rebuilt, report = conform(raw, socket, ConformSettings())
     z_tip, z_top = float(plug[0][:, 2].min()), float(plug[0][:, 2].max())
     options = cad.ConvertOptions(symmetry=symmetry, plug_mass=0.3).resolved()
+    rows = []
+    for kind, hulls in (("CoACD's pieces", raw), ("rebuilt", rebuilt)):
+        check = check_clearance(plug, plug_hulls, socket, hulls)
+        print(
+            f"{pair}, CoACD {threshold:g} ({seconds:.1f} s), {kind}: {len(hulls)} socket pieces; "
+            f"{check.summary()}; {'passes' if check.passed else 'FAILS'} at keep {check.keep}",
+            flush=True,
+        )
 
-    def make():
-        tool, _ = cad.tool_fragment(plug, hulls[0], z_tip, z_top, options, Key(symmetry))
-        return tool, cad.target_fragment(socket, hulls[1], z_tip, options, Key(symmetry))
+        def make(hulls=hulls):
+            tool, _ = cad.tool_fragment(plug, plug_hulls, z_tip, z_top, options, Key(symmetry))
+            return tool, cad.target_fragment(socket, hulls, z_tip, options, Key(symmetry))
 
-    return f"{pair}, CoACD {threshold:g}: {len(hulls[1])} socket pieces", make
+        rows.append((f"{pair}, CoACD {threshold:g}, {kind}: {len(hulls)} socket pieces", make))
+    print(f"  rebuilding: {report.summary()} in {report.seconds:.1f} s", flush=True)
+    return rows
 
 
 def _outcome(r) -> str:
@@ -172,6 +189,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--thresholds", default="", help="comma-separated CoACD thresholds to convert at")
     parser.add_argument(
         "--round", action="store_true", help="convert the round cone pair instead of the keyed one"
+    )
+    parser.add_argument(
+        "--fragments",
+        action="append",
+        default=[],
+        metavar="DIR",
+        help="also time the conversion in DIR (tool.xml, target.xml)",
     )
     args = parser.parse_args(argv)
     started = time.perf_counter()
@@ -190,9 +214,13 @@ def main(argv: list[str] | None = None) -> int:
         else:
             plug_stl, socket_stl = export_keyed(Path(tmp) / "cad")
         if (EXAMPLE / "tool.xml").is_file() and not args.round:
-            rows.append(("keyed CAD example, convex pieces", _fragments_from_dir(EXAMPLE)))
+            rows.append(
+                (f"keyed CAD example, {_pieces(EXAMPLE)} socket pieces", _fragments_from_dir(EXAMPLE))
+            )
+        for directory in map(Path, args.fragments):
+            rows.append((f"{directory}, {_pieces(directory)} socket pieces", _fragments_from_dir(directory)))
         for text in filter(None, args.thresholds.split(",")):
-            rows.append(_pieces_row(pair, plug_stl, socket_stl, float(text), symmetry))
+            rows += _pieces_rows(pair, plug_stl, socket_stl, float(text), symmetry)
         sdf = Path(tmp) / "sdf"
         convert(
             plug_stl,
@@ -205,15 +233,16 @@ def main(argv: list[str] | None = None) -> int:
 
         print(f"MuJoCo {mujoco.__version__}; push 5 N; sdf_iterations / initpoints at MuJoCo's defaults\n")
         print(
-            "| geometry | case | geoms | µs/step in contact | collision µs/step | seated | max penetration [µm] |"
+            "| geometry | case | geoms | µs/step in contact | collision µs/step | seated "
+            "| max penetration [µm] | most contacts |"
         )
-        print("|---|---|---|---|---|---|---|")
+        print("|---|---|---|---|---|---|---|---|")
         for name, make in rows:
             for case, yaw in CASES:
                 r, ngeom = measure(make, case, yaw)
                 print(
                     f"| {name} | {case.name} | {ngeom} | {r.us_per_step:.1f} | {r.collision_us_per_step:.1f} | "
-                    f"{_outcome(r)} | {-1e6 * r.min_contact_dist:.1f} |",
+                    f"{_outcome(r)} | {-1e6 * r.min_contact_dist:.1f} | {r.max_contacts} |",
                     flush=True,
                 )
     print(f"\nwall time {time.perf_counter() - started:.1f} s")

@@ -1,10 +1,12 @@
 """``python -m compliant_docking.interface PLUG SOCKET --out DIR``: a docking interface from
-CAD, as tool and target fragments of convex pieces with their clearance checked
+CAD, as tool and target fragments of convex pieces rebuilt to collide like the solid
+parts, with their clearance checked and their contacts audited
 (:mod:`compliant_docking.sim.geometry.cad`; docs/interfaces.md).
 
 Needs the optional ``cad`` extra (coacd, trimesh): ``pip install -e '.[cad]'``.
 Exit status: 0 fragments written (or already up to date), 1 unusable input,
-2 refused (the convex pieces lose the clearance).
+2 refused (the convex pieces lose the clearance, leave holes, or their contacts fail the
+audit: the message says which and where; nothing is written).
 """
 
 from __future__ import annotations
@@ -13,7 +15,8 @@ import argparse
 import sys
 from pathlib import Path
 
-from compliant_docking.sim.geometry.cad import COLLISIONS, UNITS, ClearanceLost, ConvertOptions, convert
+from compliant_docking.sim.geometry.cad import COLLISIONS, UNITS, ConvertOptions, Refused, convert
+from compliant_docking.sim.geometry.conform import ConformSettings
 from compliant_docking.sim.geometry.convex import CoacdSettings
 
 EXAMPLE_DIR = "assets/interfaces/keyed_cad"
@@ -22,12 +25,13 @@ QUICK = {"resolution": 500, "mcts_nodes": 10, "mcts_iterations": 30}
 
 
 def _parser() -> argparse.ArgumentParser:
-    d, c = ConvertOptions(), CoacdSettings()  # the defaults' one home
+    d, c, g = ConvertOptions(), CoacdSettings(), ConformSettings()  # the defaults' one home
     p = argparse.ArgumentParser(
         prog="python -m compliant_docking.interface",
         description=(
-            "A docking interface from CAD: tool and target fragments of convex pieces, their "
-            "clearance checked (docs/interfaces.md)."
+            "A docking interface from CAD: tool and target fragments of convex pieces that collide "
+            "like the solid parts, their clearance checked and their contacts audited "
+            "(docs/interfaces.md)."
         ),
         epilog=(
             "The two files hold the parts mated, in one frame, docking axis along z out of the "
@@ -66,6 +70,24 @@ def _parser() -> argparse.ArgumentParser:
     )
     p.add_argument(
         "--max-pieces", type=int, default=d.max_pieces, help="CoACD's cap on pieces per part (-1: none)"
+    )
+    p.add_argument(
+        "--margin-mm",
+        type=float,
+        default=1e3 * g.margin,
+        help=f"how far the pieces' cut faces grow into their neighbours [mm] ({1e3 * g.margin:g})",
+    )
+    p.add_argument(
+        "--bevel-deg",
+        type=float,
+        default=g.bevel_deg,
+        help=f"the bevel of the pieces' seams in a face, from the face [deg] ({g.bevel_deg:g})",
+    )
+    p.add_argument(
+        "--audit-tolerance-deg",
+        type=float,
+        default=d.audit_tolerance_deg,
+        help=f"largest angle of a contact normal from the socket's surface ({d.audit_tolerance_deg:g})",
     )
     p.add_argument(
         "--keep", type=float, default=d.keep, help=f"share of every gap the pieces must keep ({d.keep})"
@@ -134,26 +156,29 @@ def main(argv: list[str] | None = None) -> int:
         coacd=CoacdSettings(threshold=args.threshold, seed=args.seed, **(QUICK if args.quick else {})),
         min_threshold=args.min_threshold,
         max_pieces=args.max_pieces,
+        conform=ConformSettings(margin=args.margin_mm * 1e-3, bevel_deg=args.bevel_deg),
+        audit_tolerance_deg=args.audit_tolerance_deg,
         keep=args.keep,
         lift=args.lift_mm * 1e-3,
         collision=args.collision,
     )
     try:
         result = convert(args.plug, args.socket, args.out, options)
-    except ClearanceLost as exc:
+    except Refused as exc:
         print(f"refused: {exc}", file=sys.stderr)
         return 2
     except (ValueError, ImportError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 1
     m, out = result.manifest, Path(args.out)
-    clearance, play = m["clearance"], m["key_yaw_play_deg"]
+    clearance, play, audit = m["clearance"], m["key_yaw_play_deg"], m["contact_audit"]
     collision = (
         "SDF collision"
         if clearance is None
         else f"{m['pieces']['plug']} plug + {m['pieces']['socket']} socket pieces (CoACD threshold "
         f"{m['thresholds']}); clearance {1e3 * clearance['nominal_clearance_m']:.4f} mm nominal, "
-        f"{1e3 * clearance['pieces_clearance_m']:.4f} mm with the pieces"
+        f"{1e3 * clearance['pieces_clearance_m']:.4f} mm with the pieces; contact audit: "
+        f"{audit['contacts']} contacts, worst normal {audit['worst_deg']:.2f} deg off the socket's surface"
     )
     print(
         f"{out}: {collision}; key symmetry {m['key_symmetry']}, yaw play "

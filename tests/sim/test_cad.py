@@ -1,10 +1,12 @@
 """The CAD route: the keyed pair exported as STL, the clearance check of convex pieces,
-the converter (CoACD, cache, refinement, refusal), its fragments in a scene, docking runs."""
+the converter (CoACD, the pieces rebuilt, cache, refinement, refusal), its fragments in a
+scene, docking runs. The session's conversion (``converted``) is tests/sim/conftest.py's."""
 
 from __future__ import annotations
 
 import json
 import math
+import re
 import shutil
 
 import mujoco
@@ -12,24 +14,24 @@ import numpy as np
 import pytest
 
 from compliant_docking.config.store import default_keyed
-from compliant_docking.interface import QUICK as QUICK_SEARCH
 from compliant_docking.interface import export_keyed, main
 from compliant_docking.run.runner import execute
 from compliant_docking.sim.geometry import cad
 from compliant_docking.sim.geometry.clearance import check_clearance, yaw_play_deg
-from compliant_docking.sim.geometry.convex import CoacdSettings, Hull, is_convex, mesh_volume
+from compliant_docking.sim.geometry.conform import inside
+from compliant_docking.sim.geometry.convex import Hull, is_convex, mesh_volume
 from compliant_docking.sim.geometry.fragment import Key, read_key
 from compliant_docking.sim.geometry.keyed import keyed_plug_inertia, keyed_socket_pieces
 from compliant_docking.sim.geometry.mesh import keyed_cad_pair
+from compliant_docking.sim.geometry.solid import Solid
 from compliant_docking.sim.scene import build_scene
 from tests.helpers import REPO_ROOT, make_cfg
+from tests.sim.conftest import QUICK
 
 pytest.importorskip("coacd", reason="the CAD converter needs the 'cad' extra (pip install -e '.[cad]')")
 pytest.importorskip("trimesh", reason="the CAD converter needs the 'cad' extra (pip install -e '.[cad]')")
 
 EXAMPLE = REPO_ROOT / "assets" / "interfaces" / "keyed_cad"
-#: CoACD's search cut down (about 5 s instead of 20 s on the example socket); same threshold
-QUICK = CoacdSettings(threshold=0.05, **QUICK_SEARCH)
 PLUG, SOCKET, _ = default_keyed()
 
 
@@ -95,16 +97,6 @@ def test_a_piece_narrowing_one_face_by_a_third_fails_at_keep_075(pair):
 
 
 # ------------------------------------------------------------------------ converter
-@pytest.fixture(scope="module")
-def converted(tmp_path_factory):
-    """The exported pair through the converter, CoACD's search cut down (QUICK), keep 0.5."""
-    root = tmp_path_factory.mktemp("cad")
-    plug_stl, socket_stl = export_keyed(root / "cad")
-    options = cad.ConvertOptions(symmetry=4, plug_mass=0.3, coacd=QUICK, keep=0.5)
-    result = cad.convert(plug_stl, socket_stl, root / "out", options, log=lambda _: None)
-    return plug_stl, socket_stl, options, result
-
-
 def test_converter_writes_fragments_the_scene_loads(converted):
     *_, result = converted
     m = result.manifest
@@ -157,22 +149,74 @@ def test_second_call_uses_the_cache(converted, monkeypatch, tmp_path):
     assert other.manifest["input_hash"] != result.manifest["input_hash"]
 
 
-def test_a_coarse_decomposition_is_refused(converted, tmp_path):
-    """CoACD capped at 2 pieces per part cannot keep the bore open: refused, no files."""
+def test_pieces_are_inside_the_parts_and_keep_every_gap(converted):
+    """The margin never costs clearance: every rebuilt piece, as written (6 significant
+    digits), lies inside its part to 0.2 µm, so every gap keeps 100 % of its nominal
+    width and no point of either surface is inside a piece of the other part."""
+    plug_stl, socket_stl, options, result = converted
+    clearance = result.manifest["clearance"]
+    assert clearance["pieces_clearance_m"] == pytest.approx(clearance["nominal_clearance_m"], abs=2e-7)
+    assert clearance["worst_kept"] > 0.999
+    assert clearance["plug_inside_socket_pieces_fraction"] == 0.0
+    socket = Solid(cad.load_mesh(socket_stl, socket_stl.read_bytes(), 1e-3, "socket"))
+    model = mujoco.MjSpec.from_file(str(result.out_dir / "target.xml")).compile()
+    seat = np.array(result.manifest["seat_in_cad_m"])
+    pieces = [
+        _piece(model, g) + seat for g in range(model.ngeom) if model.geom(g).name.startswith("socket_piece")
+    ]
+    assert len(pieces) == result.manifest["pieces"]["socket"]
+    assert all(inside(Hull.of(p), socket, tolerance=2e-7) for p in pieces)
+    # every cut grew into its neighbours (by at least half the margin), seams are bevelled
+    report = result.manifest["conform"]["socket"]
+    assert report["cut_faces"] > 0 and report["least_margin_m"] >= 0.5 * options.conform.margin
+    assert report["bevels"] > 0 and report["uncovered"] == 0.0
+
+
+def _piece(model: mujoco.MjModel, geom: int) -> np.ndarray:
+    """A mesh geom's vertices in its body frame (MuJoCo moves a mesh to its centroid)."""
+    mesh = model.geom_dataid[geom]
+    start, count = model.mesh_vertadr[mesh], model.mesh_vertnum[mesh]
+    rotation = np.zeros(9)
+    mujoco.mju_quat2Mat(rotation, model.geom_quat[geom])
+    vertices = model.mesh_vert[start : start + count].astype(float)
+    return vertices @ rotation.reshape(3, 3).T + model.geom_pos[geom]
+
+
+def test_a_coarse_decomposition_is_made_exact(converted, tmp_path):
+    """CoACD capped at 2 pieces per part fills the bore (the converter used to refuse
+    it): split by the socket's own faces and merged, its pieces keep every gap and pass
+    the contact audit."""
     plug_stl, socket_stl, *_ = converted
     options = cad.ConvertOptions(symmetry=4, coacd=QUICK, max_pieces=2, min_threshold=QUICK.threshold)
-    with pytest.raises(cad.ClearanceLost, match="do not keep the clearance") as caught:
+    m = cad.convert(plug_stl, socket_stl, tmp_path, options, log=lambda _: None).manifest
+    assert m["conform"]["socket"]["coacd"] == 2 and m["thresholds"]["socket"] == QUICK.threshold
+    assert m["clearance"]["worst_kept"] > 0.999 and m["contact_audit"]["passed"]
+
+
+def _as_coacd_made_them(hulls, mesh, settings):
+    """conform() that keeps CoACD's pieces as they are."""
+    return hulls, cad.ConformReport(len(hulls), len(hulls), len(hulls), 0, 0, 0.0, 0, 0, 0.0, 0.0)
+
+
+def test_raw_coacd_pieces_are_refused_by_the_contact_audit(converted, tmp_path, monkeypatch):
+    """Without the rebuilding, CoACD's own pieces (which keep half of every gap, so the
+    clearance check passes) fail the contact audit: refused, naming where, and nothing
+    written."""
+    plug_stl, socket_stl, *_ = converted
+
+    monkeypatch.setattr(cad, "conform", _as_coacd_made_them)
+    options = cad.ConvertOptions(symmetry=4, coacd=QUICK, keep=0.5)
+    with pytest.raises(cad.ContactsUnsound, match=r"deg off on socket_piece_\d+ at \(") as caught:
         cad.convert(plug_stl, socket_stl, tmp_path, options, log=lambda _: None)
-    assert caught.value.report.refine() == ["socket"]
-    assert not (tmp_path / "tool.xml").exists()
+    assert caught.value.audit.worst_deg > 20.0 and caught.value.audit.unsound
+    assert not (tmp_path / "tool.xml").exists() and not (tmp_path / "interface.json").exists()
 
 
-def test_refinement_halves_the_threshold_of_the_part_that_lost_clearance(
-    pair, converted, tmp_path, monkeypatch
-):
-    """A socket decomposition that fills the bore at 0.05 and is exact below: the converter
-    refines the socket only (0.05 → 0.025) and then writes."""
-    _, socket_mesh, _, pieces = pair
+def test_refinement_halves_the_threshold_of_the_part_with_holes(pair, converted, tmp_path, monkeypatch):
+    """A socket decomposition that leaves a wall out at 0.05 (a hole the growth cannot
+    close) and is exact below: the converter refines the socket only (0.05 → 0.025);
+    with nothing finer allowed it refuses, naming the hole."""
+    _, _, _, pieces = pair
     plug_stl, socket_stl, *_ = converted
     calls = []
 
@@ -180,12 +224,15 @@ def test_refinement_halves_the_threshold_of_the_part_that_lost_clearance(
         calls.append(settings.threshold)
         if is_convex(vertices, faces):
             return [Hull.of(vertices)]
-        return [Hull.of(vertices)] if settings.threshold >= 0.05 else pieces
+        return pieces[1:] if settings.threshold >= 0.05 else pieces
 
     monkeypatch.setattr(cad, "decompose", fake)
     result = cad.convert(plug_stl, socket_stl, tmp_path, cad.ConvertOptions(symmetry=4), log=lambda _: None)
     assert result.manifest["thresholds"] == {"plug": 0.05, "socket": 0.025}
     assert calls == [0.05, 0.05, 0.025]  # plug once (then cached), socket twice
+    with pytest.raises(cad.ClearanceLost, match=r"pieces leave holes \(\d+\.\d+ % of the socket's surface"):
+        options = cad.ConvertOptions(symmetry=4, min_threshold=0.05)
+        cad.convert(plug_stl, socket_stl, tmp_path / "refused", options, log=lambda _: None)
 
 
 def test_sdf_route_writes_sdf_geoms(converted, tmp_path):
@@ -232,6 +279,14 @@ def test_command_line_exports_converts_from_the_cache_and_exits_by_outcome(
     out = capsys.readouterr().out
     assert "(from the cache)" in out and f"tool.mjcf={copy / 'tool.xml'}" in out
     assert main([str(tmp_path / "none.stl"), str(socket_stl), "--out", str(copy)]) == 1
+    assert "no such file" in capsys.readouterr().err
+    # CoACD's own pieces (cached), not rebuilt: the contact audit refuses them, saying where
+    monkeypatch.setattr(cad, "conform", _as_coacd_made_them)
+    assert main([*argv, "--quick", "--keep", "0.5", "--margin-mm", "2.5"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("refused: the convex pieces' contacts are not those of the solid parts")
+    assert re.search(r"\d+\.\d deg off on socket_piece_\d+ at \(-?\d+\.\d\d, ", err)
+    assert json.loads((copy / "interface.json").read_text()) == result.manifest  # nothing written
     plug, socket, plug_hulls, _ = pair
     lost = check_clearance(plug, plug_hulls, socket, [Hull.of(socket[0])], samples=500)
 
@@ -294,13 +349,13 @@ def test_converted_example_docks_with_every_controller(tmp_path, robot, controll
 
 @pytest.mark.slow
 def test_example_converts_from_scratch_with_the_defaults(tmp_path):
-    """The README's `make` step without its cache: CoACD refines the socket until the pieces
-    keep 75 % of every gap (about 2 minutes), and the result docks."""
+    """The README's `make` step without its cache: CoACD once at 0.05, the pieces rebuilt
+    (they keep every gap), the contact audit passed (about 40 s), and the result docks."""
     plug_stl, socket_stl = export_keyed(tmp_path / "cad")
     result = cad.convert(
         plug_stl, socket_stl, tmp_path / "out", cad.ConvertOptions(symmetry=4, plug_mass=0.3)
     )
-    assert result.manifest["clearance"]["worst_kept"] >= 0.75
+    assert result.manifest["clearance"]["worst_kept"] > 0.999 and result.manifest["contact_audit"]["passed"]
     record = execute(
         make_cfg(
             f"tool.mjcf={tmp_path / 'out' / 'tool.xml'}",

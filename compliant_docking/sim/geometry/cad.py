@@ -11,10 +11,15 @@ From that the converter derives the frames of the scene's convention:
   the tip (CAD −z) and x along CAD x; ``tcp`` is the tip, (0, 0, z_top − z_tip) in it;
   ``sensor_site`` is the ``dock`` origin. So at the mated pose tcp = seat · Rx(180°).
 
-Each part is decomposed into convex pieces (its hull if it is convex, else CoACD), the
-pieces are checked against the clearance (:mod:`.clearance`); a part whose pieces lose
-clearance is decomposed again at half the CoACD threshold, down to ``min_threshold``,
-and the conversion is refused if that is not enough (:class:`ClearanceLost`). With
+Each part is decomposed into convex pieces (its hull if it is convex, else CoACD), and
+the pieces are rebuilt to collide like the solid (:mod:`.conform`: split exactly by the
+part's own faces, merged, grown into each other at their cuts and bevelled at their
+seams). They are checked against the clearance (:mod:`.clearance`) and for holes; a part
+that fails is decomposed again at half the CoACD threshold, down to ``min_threshold``,
+and the conversion is refused if that is not enough (:class:`ClearanceLost`). The
+fragments' contacts are then audited (:mod:`.conversion_audit`: the plug swept over the
+mouth, funnel and bore, every contact normal against the socket's surface) and the
+conversion is refused if one is unsound (:class:`ContactsUnsound`). With
 ``collision="sdf"`` each part instead collides as its own mesh through MuJoCo's signed
 distance field (``type="sdf"``): exact shape, no decomposition, but far slower contact
 (docs/interfaces.md has the measurements). The
@@ -28,6 +33,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
@@ -38,6 +44,7 @@ import mujoco
 import numpy as np
 
 from compliant_docking.config.geometry import ContactParams
+from compliant_docking.sim.geometry.cad_fragments import target_fragment, tool_fragment
 from compliant_docking.sim.geometry.clearance import (
     LIFT,
     SAMPLES,
@@ -45,13 +52,12 @@ from compliant_docking.sim.geometry.clearance import (
     check_clearance,
     yaw_play_deg,
 )
-from compliant_docking.sim.geometry.collision import (
-    PLUG_COLLISION_GROUP,
-    PLUG_RGBA,
-    SOCKET_RGBA,
-    VISUAL_GROUP,
-    make_plug_collider,
-    make_socket_collider,
+from compliant_docking.sim.geometry.conform import ConformReport, ConformSettings, conform
+from compliant_docking.sim.geometry.conversion_audit import (
+    TOLERANCE_DEG,
+    ContactAudit,
+    audit_fragments,
+    sweep_for,
 )
 from compliant_docking.sim.geometry.convex import (
     CoacdSettings,
@@ -60,11 +66,11 @@ from compliant_docking.sim.geometry.convex import (
     decompose,
     require_cad_extra,
 )
-from compliant_docking.sim.geometry.fragment import MATED, Key, declare_key
+from compliant_docking.sim.geometry.fragment import Key
 from compliant_docking.sim.geometry.mesh import Mesh
 
 #: bump when the fragments written for the same inputs change (invalidates the cache)
-CONVERTER_VERSION = 1
+CONVERTER_VERSION = 2
 COLLISIONS = ("convex", "sdf")
 UNITS = {"m": 1.0, "cm": 0.01, "mm": 0.001, "in": 0.0254}
 MANIFEST, TOOL_FILE, TARGET_FILE = "interface.json", "tool.xml", "target.xml"
@@ -78,7 +84,9 @@ class ConvertOptions:
     360°/n; 1: one way only; 0: round). plug_mass [kg]: None = density × volume.
     density [kg/m³]. coacd: CoACD settings of the first attempt. min_threshold: the
     lowest CoACD threshold refinement tries. max_pieces: CoACD's cap on pieces per part
-    (-1: none). keep, lift, samples: the clearance check (:func:`.clearance.check_clearance`).
+    (-1: none). conform: how the pieces are rebuilt (:class:`.conform.ConformSettings`).
+    keep, lift, samples: the clearance check (:func:`.clearance.check_clearance`).
+    audit_tolerance_deg: the contact audit's tolerance (:mod:`.conversion_audit`).
     """
 
     unit: str = "mm"
@@ -88,15 +96,18 @@ class ConvertOptions:
     coacd: CoacdSettings = field(default_factory=CoacdSettings)
     min_threshold: float = 0.01
     max_pieces: int = -1
+    conform: ConformSettings = field(default_factory=ConformSettings)
     keep: float = 0.75
     lift: float = LIFT
     samples: int = SAMPLES
     contact: ContactParams | None = None
     collision: str = "convex"
+    audit_tolerance_deg: float = TOLERANCE_DEG
 
     def record(self) -> dict:
         out = dict(self.__dict__)
         out["coacd"] = self.coacd.record()
+        out["conform"] = self.conform.record()
         if self.contact is not None:
             out["contact"] = {
                 k: list(v) if isinstance(v, tuple) else v for k, v in self.contact.__dict__.items()
@@ -120,22 +131,53 @@ class ConvertOptions:
             raise ValueError(f"symmetry must be an integer >= 0 (0: round); got {self.symmetry!r}")
         if not 0.0 < self.keep <= 1.0:
             raise ValueError(f"keep must be in (0, 1] (share of the clearance to keep); got {self.keep}")
+        self.conform.check()
+        if not (math.isfinite(self.audit_tolerance_deg) and 0.0 < self.audit_tolerance_deg < 90.0):
+            raise ValueError(
+                f"audit_tolerance_deg must be in (0, 90) [deg]; got {self.audit_tolerance_deg!r}"
+            )
         if not 0.0 < self.min_threshold <= self.coacd.threshold:
             raise ValueError(
                 f"min_threshold must be in (0, threshold = {self.coacd.threshold}]; got {self.min_threshold}"
             )
 
 
-class ClearanceLost(ValueError):
-    """The pieces lose the clearance even at the lowest CoACD threshold; ``report`` says how."""
+class Refused(ValueError):
+    """The conversion is refused: the pieces are not a faithful model of the parts."""
 
-    def __init__(self, report: ClearanceReport, thresholds: dict[str, float]):
+
+class ClearanceLost(Refused):
+    """The pieces lose the clearance, or leave holes in a part's surface, even at the
+    lowest CoACD threshold; ``report`` says how."""
+
+    def __init__(
+        self, report: ClearanceReport, thresholds: dict[str, float], holes: dict[str, float] | None = None
+    ):
         self.report = report
+        self.holes = holes or {}
+        failed = [] if report.passed else [f"do not keep the clearance ({report.summary()})"]
+        failed += [
+            f"leave holes ({100 * share:.3f} % of the {part}'s surface, probed 1 µm under it, is in no piece)"
+            for part, share in self.holes.items()
+        ]
         super().__init__(
-            f"the convex pieces do not keep the clearance ({report.summary()}) even at CoACD "
+            f"the convex pieces {' and '.join(failed)} even at CoACD "
             f"threshold {thresholds} (min_threshold): refusing to write fragments. Lower "
             "--min-threshold, allow more pieces (--max-pieces), or use MuJoCo's SDF collision "
             "for this shape (docs/interfaces.md)"
+        )
+
+
+class ContactsUnsound(Refused):
+    """The fragments' contacts fail the contact audit; ``audit`` says where."""
+
+    def __init__(self, audit: ContactAudit):
+        self.audit = audit
+        super().__init__(
+            f"the convex pieces' contacts are not those of the solid parts ({audit.summary()}): "
+            f"{audit.describe()}. Refusing to write fragments. A larger --margin-mm or a smaller "
+            "--bevel-deg buries the pieces' cuts deeper; --collision sdf avoids pieces "
+            "(docs/interfaces.md, 'How to check a new interface')"
         )
 
 
@@ -171,26 +213,50 @@ def load_mesh(path: Path, data: bytes, scale: float, what: str) -> Mesh:
     return np.asarray(mesh.vertices, dtype=np.float64) * scale, np.asarray(mesh.faces, dtype=np.int64)
 
 
-def _pieces(mesh: Mesh, settings: CoacdSettings, max_pieces: int, cache: Path, log) -> list[Hull]:
-    """The part's convex pieces, from ``cache`` when this mesh was decomposed so before."""
-    vertices, faces = mesh
-    key = hashlib.sha256(
-        vertices.tobytes()
-        + faces.tobytes()
-        + json.dumps([settings.record(), max_pieces, coacd_version()], sort_keys=True).encode()
-    ).hexdigest()[:24]
-    path = cache / f"{key}.npz"
+def _cached(cache: Path, key: bytes, make: Callable[[], tuple[list[Hull], dict]]) -> tuple[list[Hull], dict]:
+    """Pieces and their record from ``cache`` under ``key``'s digest, else made and stored."""
+    path = cache / f"{hashlib.sha256(key).hexdigest()[:24]}.npz"
     if path.is_file():
-        with np.load(path) as stored:  # arr_0, arr_1, …
-            return [Hull.of(stored[f"arr_{i}"]) for i in range(len(stored.files))]
-    started = time.perf_counter()
-    hulls = decompose(vertices, faces, settings, max_pieces=max_pieces)
-    log(
-        f"  CoACD threshold {settings.threshold:g}: {len(hulls)} pieces in {time.perf_counter() - started:.1f} s"
-    )
+        with np.load(path) as stored:  # arr_0, arr_1, … and the record
+            arrays = sorted((f for f in stored.files if f.startswith("arr_")), key=lambda f: int(f[4:]))
+            record = json.loads(str(stored["record"])) if "record" in stored.files else {}
+            return [Hull.of(stored[f]) for f in arrays], record
+    hulls, record = make()
     cache.mkdir(parents=True, exist_ok=True)
-    np.savez(path, *[h.vertices for h in hulls])
-    return hulls
+    np.savez(path, *[h.vertices for h in hulls], record=json.dumps(record))
+    return hulls, record
+
+
+def _pieces(mesh: Mesh, settings: CoacdSettings, max_pieces: int, cache: Path, log) -> list[Hull]:
+    """The part's convex pieces by CoACD, from ``cache`` when this mesh was decomposed so before."""
+    vertices, faces = mesh
+
+    def make() -> tuple[list[Hull], dict]:
+        started = time.perf_counter()
+        hulls = decompose(vertices, faces, settings, max_pieces=max_pieces)
+        seconds = time.perf_counter() - started
+        log(f"  CoACD threshold {settings.threshold:g}: {len(hulls)} pieces in {seconds:.1f} s")
+        return hulls, {"seconds": seconds}
+
+    key = vertices.tobytes() + faces.tobytes()
+    key += json.dumps([settings.record(), max_pieces, coacd_version()], sort_keys=True).encode()
+    return _cached(cache, key, make)[0]
+
+
+def _conformed(
+    mesh: Mesh, hulls: list[Hull], settings: ConformSettings, cache: Path, what: str, log
+) -> tuple[list[Hull], ConformReport]:
+    """The pieces rebuilt by :func:`.conform.conform`, from ``cache`` when done so before."""
+
+    def make() -> tuple[list[Hull], dict]:
+        pieces, report = conform(hulls, mesh, settings)
+        log(f"  {what}: {report.summary()} in {report.seconds:.1f} s")
+        return pieces, report.record()
+
+    key = b"conform" + mesh[0].tobytes() + mesh[1].tobytes() + b"".join(h.vertices.tobytes() for h in hulls)
+    key += json.dumps([settings.record(), CONVERTER_VERSION], sort_keys=True).encode()
+    pieces, record = _cached(cache, key, make)
+    return pieces, ConformReport(**record)
 
 
 def convert(
@@ -234,11 +300,12 @@ def convert(
     cache = out_dir / ".cache"
     settings = {"plug": options.coacd, "socket": options.coacd}
     report: ClearanceReport | None = None
+    conformed: dict[str, ConformReport] = {}
     while options.collision == "convex":
-        hulls = {
-            part: _pieces(m, settings[part], options.max_pieces, cache, log)
-            for part, m in (("plug", plug), ("socket", socket))
-        }
+        hulls = {}
+        for part, m in (("plug", plug), ("socket", socket)):
+            raw = _pieces(m, settings[part], options.max_pieces, cache, log)
+            hulls[part], conformed[part] = _conformed(m, raw, options.conform, cache, part, log)
         report = check_clearance(
             plug,
             hulls["plug"],
@@ -249,17 +316,20 @@ def convert(
             samples=options.samples,
         )
         log(f"  {len(hulls['plug'])} plug + {len(hulls['socket'])} socket pieces: {report.summary()}")
-        if report.passed:
+        holes = {part: r.uncovered for part, r in conformed.items() if not r.covered}
+        if report.passed and not holes:
             break
-        finer = {part: settings[part].threshold / 2.0 for part in report.refine()}
+        refine = sorted(set(report.refine()) | set(holes))
+        finer = {part: settings[part].threshold / 2.0 for part in refine}
         if not finer or all(settings[p].threshold <= options.min_threshold for p in finer):
-            raise ClearanceLost(report, {p: settings[p].threshold for p in report.refine()})
+            raise ClearanceLost(report, {p: settings[p].threshold for p in refine}, holes)
         for part, threshold in finer.items():
             settings[part] = replace(settings[part], threshold=max(threshold, options.min_threshold))
         log(
             f"  refining {', '.join(finer)}: CoACD threshold {', '.join(f'{settings[p].threshold:g}' for p in finer)}"
         )
 
+    audit: ContactAudit | None = None
     if options.collision == "sdf":  # the meshes themselves; no pieces, no check, no measured play
         hulls, report = {"plug": [], "socket": []}, None
         key = Key(options.symmetry, None)
@@ -273,10 +343,22 @@ def convert(
         if options.symmetry and play is None:
             log("  the plug turns freely in the socket's pieces: the interface is not keyed (key_symmetry 0)")
     tool, mass = tool_fragment(plug, hulls["plug"], z_tip, z_top, options, key)
-    target = target_fragment(socket, hulls["socket"], z_tip, options, key)
+    texts = {
+        TOOL_FILE: tool.to_xml(),
+        TARGET_FILE: target_fragment(socket, hulls["socket"], z_tip, options, key).to_xml(),
+    }
+    if report is not None:  # audit what is written (MuJoCo's XML keeps 6 significant digits)
+        sweep = sweep_for(plug, socket, z_tip, key.symmetry, report.nominal_m)
+        written = {name: mujoco.MjSpec.from_string(text) for name, text in texts.items()}
+        audit = audit_fragments(
+            written[TOOL_FILE], written[TARGET_FILE], plug, socket, z_tip, sweep, options.audit_tolerance_deg
+        )
+        log(f"  {audit.summary()}")
+        if not audit.passed:
+            raise ContactsUnsound(audit)
     out_dir.mkdir(parents=True, exist_ok=True)
-    (out_dir / TOOL_FILE).write_text(tool.to_xml())
-    (out_dir / TARGET_FILE).write_text(target.to_xml())
+    for name, text in texts.items():
+        (out_dir / name).write_text(text)
     manifest = {
         "input_hash": digest,
         "plug_file": str(plug_path),
@@ -286,6 +368,8 @@ def convert(
         "collision": options.collision,
         "pieces": {part: len(h) for part, h in hulls.items()},
         "clearance": None if report is None else report.record(),
+        "conform": {part: r.record() for part, r in conformed.items()},
+        "contact_audit": None if audit is None else audit.record(),
         "key_symmetry": key.symmetry,
         "key_yaw_play_deg": key.yaw_play_deg,
         "tcp_in_tool_dock_m": [0.0, 0.0, z_top - z_tip],
@@ -298,103 +382,3 @@ def convert(
     }
     manifest_path.write_text(json.dumps(manifest, indent=2) + "\n")
     return Conversion(out_dir, False, manifest)
-
-
-def _mass_properties(plug: Mesh, options: ConvertOptions) -> tuple[float, np.ndarray, np.ndarray]:
-    """Mass [kg], centre of mass and inertia about it (CAD axes) of the uniform plug."""
-    import trimesh
-
-    mesh = trimesh.Trimesh(*plug, process=False)
-    volume = float(mesh.volume)
-    density = options.density if options.plug_mass is None else options.plug_mass / volume
-    mesh.density = density
-    return float(mesh.mass), np.asarray(mesh.center_mass), np.asarray(mesh.moment_inertia)
-
-
-def tool_fragment(
-    plug: Mesh, hulls: list[Hull], z_tip: float, z_top: float, options: ConvertOptions, key: Key
-) -> tuple[mujoco.MjSpec, dict]:
-    """The tool fragment of a plug (CAD frame, mated) and its pieces, and the mass record."""
-    top = np.array([0.0, 0.0, z_top])
-
-    def to_dock(points: np.ndarray) -> np.ndarray:  # CAD → dock frame: MATED · (p − top)
-        return (np.asarray(points) - top) @ MATED.T
-
-    mass, com, inertia = _mass_properties(plug, options)
-    com_dock, inertia_dock = to_dock(com[None])[0], MATED @ inertia @ MATED.T
-    spec = mujoco.MjSpec()
-    spec.modelname = "cad_plug"
-    body = spec.worldbody.add_body(name="dock")
-    body.explicitinertial = True
-    body.mass = mass
-    body.ipos = com_dock.tolist()
-    i = inertia_dock
-    body.fullinertia = [i[0, 0], i[1, 1], i[2, 2], i[0, 1], i[0, 2], i[1, 2]]
-    for k, hull in enumerate(hulls):
-        spec.add_mesh(name=f"plug_piece_{k}", uservert=to_dock(hull.vertices).ravel().tolist())
-        g = body.add_geom(
-            name=f"plug_piece_{k}",
-            type=mujoco.mjtGeom.mjGEOM_MESH,
-            meshname=f"plug_piece_{k}",
-            group=PLUG_COLLISION_GROUP,
-            rgba=list(PLUG_RGBA),
-        )
-        make_plug_collider(g, options.contact)
-    visual = _add_visual(spec, body, "plug_visual", to_dock(plug[0]), plug[1], VISUAL_GROUP, PLUG_RGBA)
-    if options.collision == "sdf":
-        visual.type = mujoco.mjtGeom.mjGEOM_SDF
-        make_plug_collider(visual, options.contact)
-    body.add_site(name="sensor_site", pos=[0.0, 0.0, 0.0], quat=[1.0, 0.0, 0.0, 0.0])
-    body.add_site(name="tcp", pos=[0.0, 0.0, z_top - z_tip])
-    declare_key(spec, key)
-    record = {
-        "mass_kg": mass,
-        "com_in_tool_dock_m": com_dock.tolist(),
-        "inertia_in_tool_dock_kg_m2": i.tolist(),
-    }
-    return spec, record
-
-
-def target_fragment(
-    socket: Mesh, hulls: list[Hull], z_tip: float, options: ConvertOptions, key: Key
-) -> mujoco.MjSpec:
-    """The target fragment of a socket (CAD frame, mated; the seat at z_tip) and its pieces."""
-    seat = np.array([0.0, 0.0, z_tip])
-    spec = mujoco.MjSpec()
-    spec.modelname = "cad_socket"
-    body = spec.worldbody.add_body(name="dock")
-    for k, hull in enumerate(hulls):
-        spec.add_mesh(name=f"socket_piece_{k}", uservert=(hull.vertices - seat).ravel().tolist())
-        g = body.add_geom(
-            name=f"socket_piece_{k}",
-            type=mujoco.mjtGeom.mjGEOM_MESH,
-            meshname=f"socket_piece_{k}",
-            group=PLUG_COLLISION_GROUP,
-            rgba=list(SOCKET_RGBA),
-        )
-        make_socket_collider(g, options.contact)
-    visual = _add_visual(spec, body, "socket_visual", socket[0] - seat, socket[1], 0, SOCKET_RGBA)
-    if options.collision == "sdf":
-        visual.type = mujoco.mjtGeom.mjGEOM_SDF
-        make_socket_collider(visual, options.contact)
-    body.add_site(name="seat", pos=[0.0, 0.0, 0.0])
-    body.add_site(name="mouth", pos=[0.0, 0.0, float(socket[0][:, 2].max()) - z_tip])
-    declare_key(spec, key)
-    return spec
-
-
-def _add_visual(
-    spec, body, name: str, vertices: np.ndarray, faces: np.ndarray, group: int, rgba
-) -> mujoco.MjsGeom:
-    """The part's own mesh, drawn, colliding with nothing (the SDF route makes it collide)."""
-    spec.add_mesh(name=name, uservert=np.ravel(vertices).tolist(), userface=np.ravel(faces).tolist())
-    return body.add_geom(
-        name=name,
-        type=mujoco.mjtGeom.mjGEOM_MESH,
-        meshname=name,
-        contype=0,
-        conaffinity=0,
-        density=0.0,
-        group=group,
-        rgba=list(rgba),
-    )

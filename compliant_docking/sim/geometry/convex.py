@@ -11,11 +11,21 @@ import importlib.metadata
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.spatial import ConvexHull
+from scipy.optimize import linprog
+from scipy.spatial import ConvexHull, HalfspaceIntersection, QhullError
 
 #: a part is taken as convex (one piece, its hull, no decomposition) when its volume is
 #: within this fraction of its hull's volume
 CONVEX_VOLUME_RATIO = 1e-6
+#: a hull's triangles whose planes agree within this (unit normals' 1 - cos, offsets [m])
+#: are one facet
+COPLANAR = 1e-12
+#: points closer than this are one corner of a hull [m]
+DUPLICATE = 1e-11
+#: a point this deep inside a region is a good enough start for its corners [m]
+WELL_INSIDE = 1e-5
+#: a region bounded by half-spaces is empty when no ball of this radius fits in it [m]
+THINNEST = 1e-9
 
 
 @dataclass(frozen=True)
@@ -26,20 +36,101 @@ class Hull:
     vertices: np.ndarray  # (n, 3)
     normals: np.ndarray = field(repr=False)  # (f, 3)
     offsets: np.ndarray = field(repr=False)  # (f,)
+    triangles: np.ndarray = field(repr=False)  # (m, 3) vertex indices: Qhull's triangulation
+    volume: float = field(repr=False)  # [m³]
 
     @staticmethod
     def of(points: np.ndarray) -> Hull:
-        hull = ConvexHull(np.asarray(points, dtype=float))
-        return Hull(hull.points[hull.vertices], hull.equations[:, :3].copy(), hull.equations[:, 3].copy())
+        points = np.asarray(points, dtype=float)
+        # corners found twice (planes meeting at one point) would trouble Qhull
+        points = points[np.unique(np.round(points / DUPLICATE), axis=0, return_index=True)[1]]
+        hull = _qhull(points)
+        normals, offsets = _facets(hull.equations)
+        index = np.full(len(points), -1)
+        index[hull.vertices] = np.arange(len(hull.vertices))
+        return Hull(hull.points[hull.vertices], normals, offsets, index[hull.simplices], float(hull.volume))
+
+    @staticmethod
+    def bounded_by(normals: np.ndarray, offsets: np.ndarray, inside: np.ndarray | None = None) -> Hull | None:
+        """The bounded convex region ``normals @ x + offsets <= 0`` (unit normals), or None
+        when no ball of radius :data:`THINNEST` fits in it. ``inside``: a point known to be
+        inside it, deeper than that (else the deepest point is found by linear programming)."""
+        normals, offsets = np.asarray(normals, float), np.asarray(offsets, float)
+        if inside is None or -np.max(normals @ inside + offsets) < WELL_INSIDE:
+            # Chebyshev centre: the deepest point, well inside for Qhull
+            found = linprog(
+                np.r_[0.0, 0.0, 0.0, -1.0],
+                A_ub=np.column_stack([normals, np.ones(len(normals))]),
+                b_ub=-offsets,
+                bounds=[(None, None)] * 3 + [(0.0, None)],
+                method="highs",
+            )
+            if found.status != 0 or found.x[3] < THINNEST:
+                return None
+            inside = found.x[:3]
+        halfspaces = np.column_stack([normals, offsets])
+        for options in ("", "Q12", "QJ"):
+            try:
+                corners = HalfspaceIntersection(
+                    halfspaces, inside, qhull_options=f"H {options}"
+                ).intersections
+                break
+            except QhullError:
+                if options == "QJ":
+                    raise
+        return Hull.of(corners)
+
+    def clipped(self, normal: np.ndarray, offset: float) -> Hull | None:
+        """This hull cut by the half-space ``normal @ x + offset <= 0`` (None: less than
+        :data:`THINNEST` of it is left)."""
+        height = self.vertices @ normal + offset
+        if height.max() <= 0.0:
+            return self
+        if height.min() > -THINNEST:
+            return None
+        edges = np.unique(np.sort(self.triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1), axis=0)
+        a, b = height[edges[:, 0]], height[edges[:, 1]]
+        cut = edges[(a < 0.0) != (b < 0.0)]
+        t = height[cut[:, 0]] / (height[cut[:, 0]] - height[cut[:, 1]])
+        crossings = self.vertices[cut[:, 0]] + t[:, None] * (
+            self.vertices[cut[:, 1]] - self.vertices[cut[:, 0]]
+        )
+        return Hull.of(np.vstack([self.vertices[height <= 0.0], crossings]))
+
+    def edges(self) -> np.ndarray:
+        """The hull's edges as segments ``(e, 2, 3)`` (and the diagonals of its non-triangular
+        facets, which a separating-axis test may use as well)."""
+        pairs = np.unique(np.sort(self.triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1), axis=0)
+        return self.vertices[pairs]
 
     @property
-    def volume(self) -> float:
-        return float(ConvexHull(self.vertices).volume)
+    def centre(self) -> np.ndarray:
+        return self.vertices.mean(axis=0)
 
     def depth(self, points: np.ndarray) -> np.ndarray:
         """Signed depth of each point inside the hull [m]: the distance to its boundary
         for points inside (> 0), a lower bound of minus the distance outside (<= 0)."""
         return -np.max(points @ self.normals.T + self.offsets, axis=1)
+
+
+def _qhull(points: np.ndarray) -> ConvexHull:
+    """Qhull's hull, allowing wide facets, then joggling the input, if it must."""
+    for options in (None, "Qt Q12", "QJ"):
+        try:
+            return ConvexHull(points, qhull_options=options)
+        except QhullError:
+            if options == "QJ":
+                raise
+    raise AssertionError("unreachable")
+
+
+def _facets(equations: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Qhull's triangle planes (``n @ x + o = 0`` rows), one per facet (coplanar merged)."""
+    same = (1.0 - equations[:, :3] @ equations[:, :3].T < COPLANAR) & (
+        np.abs(equations[:, 3, None] - equations[None, :, 3]) < COPLANAR
+    )
+    first = ~np.any(np.tril(same, -1), axis=1)
+    return equations[first, :3].copy(), equations[first, 3].copy()
 
 
 def union_depth(hulls: list[Hull], points: np.ndarray, chunk: int = 4096) -> np.ndarray:
