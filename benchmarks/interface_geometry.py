@@ -14,8 +14,8 @@ Run from the repository root (needs the `cad` extra for the conversions)::
 target.xml, e.g. an older copy of the example, so that old and new are timed in one
 process.
 
-The rig is benchmarks/contact_geometry.py's (a compliant carrier pushes the plug with
-5 N; zero gravity, 1 ms, implicitfast, elliptic cones). The CAD pair is the keyed
+The rig is benchmarks/contact_geometry.py's (the package's compliance rig: a compliant
+carrier pushes the plug with 5 N; zero gravity, 1 ms, implicitfast, elliptic cones). The CAD pair is the keyed
 interface exported as STL (compliant_docking/interface.py --export-keyed) and converted
 with compliant_docking.sim.geometry.cad; `--thresholds` converts at each CoACD threshold
 without refining (so the piece counts differ), each in two rows: CoACD's own pieces and the pieces rebuilt as the
@@ -41,9 +41,10 @@ if __package__ in (None, ""):
     sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
     sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from contact_geometry import CONTACT, PLUG, SOCKET, Case, rig_from_fragments, run_insertion  # noqa: E402
+from contact_geometry import CONTACT, PLUG, SOCKET, Case, rig_from_fragments  # noqa: E402
 
 from compliant_docking.config.store import default_keyed  # noqa: E402
+from compliant_docking.sim.compliance_rig import push_insertion  # noqa: E402
 from compliant_docking.sim.geometry import build_plug, build_socket  # noqa: E402
 from compliant_docking.sim.geometry.keyed import build_keyed_plug, build_keyed_socket  # noqa: E402
 
@@ -132,9 +133,9 @@ def measure(make, case: Case, yaw_deg: float, repeats: int = 3):
     half = 0.5 * math.radians(yaw_deg)
     socket.body("dock").quat = [math.cos(half), 0.0, 0.0, math.sin(half)]
     rig = rig_from_fragments(plug, socket, length, mouth, case)
-    best = run_insertion(rig, case.push, dwell=0.5)
+    best = push_insertion(rig, dwell=0.5)
     for _ in range(repeats - 1):
-        again = run_insertion(rig, case.push, dwell=0.5)
+        again = push_insertion(rig, dwell=0.5)
         best.us_per_step = min(best.us_per_step, again.us_per_step)
         best.collision_us_per_step = min(best.collision_us_per_step, again.collision_us_per_step)
     return best, rig.model.ngeom

@@ -2,9 +2,7 @@
 
 from __future__ import annotations
 
-import importlib.util
 import math
-import sys
 from dataclasses import replace
 
 import mujoco
@@ -13,29 +11,33 @@ import pytest
 
 from compliant_docking.config.geometry import check_fit
 from compliant_docking.config.store import default_interface
+from compliant_docking.sim.compliance_rig import (
+    Push,
+    Support,
+    interface_rig,
+    measured_free_radius,
+    push_insertion,
+)
 from compliant_docking.sim.geometry import (
     build_plug,
     build_socket,
     plug_hull_vertices,
     plug_inertia,
 )
-from tests.helpers import REPO_ROOT as ROOT
 
 #: the default interface of conf/ (tool=cone_plug, target=cone_socket)
 PLUG, SOCKET, CONTACT = default_interface()
 
 
-def _load_benchmark():
-    """The rig lives in benchmarks/contact_geometry.py (a script, not a package)."""
-    path = ROOT / "benchmarks" / "contact_geometry.py"
-    spec = importlib.util.spec_from_file_location("contact_geometry", path)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules.setdefault("contact_geometry", module)
-    spec.loader.exec_module(module)
-    return module
-
-
-bench = _load_benchmark()
+def insert(plug, socket, *, offset=0.0, push=5.0):
+    """One push-driven insertion in the compliance rig with benchmarks/contact_geometry.py's
+    carrier: a weak wrist (100 N/m, 0.5 N·m/rad) through the mounting face, the tip 2 mm
+    above the mouth and ``offset`` along +x, pushed with ``push`` newtons at up to 50 mm/s."""
+    support = Support(100.0, 10.0, 0.5, 0.02, compliance_height=plug.length)
+    rig = interface_rig(
+        plug, socket, replace(CONTACT), support=support, drive=Push(push, 0.05), offset=offset
+    )
+    return push_insertion(rig)
 
 
 def _quat_rotate(quat, vec):
@@ -119,7 +121,7 @@ def test_plug_and_socket_ignore_default_collision_geoms():
 def test_bore_free_radius_never_below_nominal(sectors):
     socket = replace(SOCKET, sectors=sectors)
     for z in (0.002, 0.015, 0.028):
-        lowest, highest = bench.measured_free_radius(socket, z)
+        lowest, highest = measured_free_radius(socket, CONTACT, z)
         assert lowest >= socket.bore_radius - 1e-9
         assert lowest == pytest.approx(socket.bore_radius, abs=1e-7)
         assert highest == pytest.approx(socket.bore_radius / math.cos(math.pi / sectors), abs=2e-6)
@@ -159,7 +161,7 @@ def test_funnel_radius_and_mouth_match_formula():
     slope = math.tan(math.radians(socket.funnel_angle_deg))
     assert socket.mouth_radius == pytest.approx(socket.bore_radius + socket.funnel_depth * slope)
     heights = np.array([0.031, 0.038, 0.0445])
-    measured = [bench.measured_free_radius(socket, z) for z in heights]
+    measured = [measured_free_radius(socket, CONTACT, z) for z in heights]
     lowest = np.array([lo for lo, _ in measured])
     np.testing.assert_allclose(lowest, [socket.free_radius(z) for z in heights], atol=1e-7)
     corner = np.array([hi for _, hi in measured])  # walls closed up to the polygon corners
@@ -175,7 +177,7 @@ def test_funnel_meets_bore_without_lip_or_gap():
     socket = replace(SOCKET)
     for dz in (-1e-5, 1e-5):
         z = socket.insertion_depth + dz
-        lowest, _ = bench.measured_free_radius(socket, z)  # raises if a ray escapes
+        lowest, _ = measured_free_radius(socket, CONTACT, z)  # raises if a ray escapes
         assert lowest == pytest.approx(socket.free_radius(z), abs=1e-8)
         assert lowest >= socket.bore_radius - 1e-9
 
@@ -195,8 +197,7 @@ def test_bore_is_closed_at_the_seat():
 # --------------------------------------------------------------------------- insertion
 @pytest.mark.parametrize("offset, sectors", [(0.0, 16), (0.003, 16), (0.003, 12)])
 def test_plug_seats_in_rig(offset, sectors):
-    case = bench.Case("test", offset=offset)
-    result = bench.insert(replace(PLUG), replace(SOCKET, sectors=sectors), replace(CONTACT), case)
+    result = insert(replace(PLUG), replace(SOCKET, sectors=sectors), offset=offset)
     assert result.seated and not result.jammed
     assert result.seat_time < 2.0
     assert abs(result.final_tip_height) < 1e-4
@@ -209,8 +210,7 @@ def test_seated_penetration_stays_small_at_30_newton():
     (over twice the planners' fastest approach) less than 60 %. (The 5 ms time constant
     gives ~53 µm and ~200 µm; the earlier 2 ms gave ~9 µm and ~75 µm but resolved impacts
     within one step, see ContactParams.)"""
-    case = bench.Case("test", offset=0.003, push=30.0)
-    result = bench.insert(replace(PLUG), replace(SOCKET), replace(CONTACT), case)
+    result = insert(replace(PLUG), replace(SOCKET), offset=0.003, push=30.0)
     clearance = replace(SOCKET).radial_clearance
     assert result.seated
     assert -result.steady_contact_dist < 0.2 * clearance
@@ -220,7 +220,7 @@ def test_seated_penetration_stays_small_at_30_newton():
 def test_oversized_plug_does_not_seat():
     """Negative control for the rig: a plug wider than the bore must stop at the bore."""
     plug = replace(PLUG, radius=0.0106)
-    result = bench.insert(plug, replace(SOCKET), replace(CONTACT), bench.Case("test"))
+    result = insert(plug, replace(SOCKET))
     assert not result.seated
     assert result.final_tip_height > 0.025
 
