@@ -76,30 +76,27 @@ def _regions(depth: float, mouth: float) -> dict[str, tuple[float, float]]:
     }
 
 
-def test_round_interface_contacts_follow_the_solid():
-    plug, socket, contact = default_interface()
+def _parametric_audit(name: str) -> tuple[Audit, float, float]:
+    """The audit of a parametric interface by its own cavity's polygonal surface, with the
+    socket's insertion depth and mouth height."""
+    if name == "round":
+        plug, socket, contact = default_interface()
+        sides, inradius = socket.sectors, socket.bore_radius
+        tool, target = build_plug(plug, contact), build_socket(socket, contact)
+    else:
+        plug, socket, contact = default_keyed()
+        sides, inradius = socket.sides, socket.bore_inradius
+        tool, target = build_keyed_plug(plug, contact), build_keyed_socket(socket, contact)
     surface = cavity_surface(
-        socket.sectors,
-        socket.bore_radius,
-        socket.insertion_depth,
-        socket.funnel_angle_deg,
-        socket.funnel_depth,
+        sides, inradius, socket.insertion_depth, socket.funnel_angle_deg, socket.funnel_depth
     )
-    audit = Audit(build_plug(plug, contact), build_socket(socket, contact), plug.length, surface)
-    _check(_sweep(audit, socket.mouth_height), _regions(socket.insertion_depth, socket.mouth_height))
+    return Audit(tool, target, plug.length, surface), socket.insertion_depth, socket.mouth_height
 
 
-def test_keyed_interface_contacts_follow_the_solid():
-    plug, socket, contact = default_keyed()
-    surface = cavity_surface(
-        socket.sides,
-        socket.bore_inradius,
-        socket.insertion_depth,
-        socket.funnel_angle_deg,
-        socket.funnel_depth,
-    )
-    audit = Audit(build_keyed_plug(plug, contact), build_keyed_socket(socket, contact), plug.length, surface)
-    _check(_sweep(audit, socket.mouth_height), _regions(socket.insertion_depth, socket.mouth_height))
+@pytest.mark.parametrize("interface", ["round", "keyed"])
+def test_parametric_interface_contacts_follow_the_solid(interface):
+    audit, depth, mouth = _parametric_audit(interface)
+    _check(_sweep(audit, mouth), _regions(depth, mouth))
 
 
 def _audit_conversion(folder, socket_stl) -> None:
