@@ -149,13 +149,22 @@ def test_a_signal_while_the_record_is_written_waits_for_it(tmp_path, monkeypatch
 def test_an_interrupted_run_in_python_is_recorded_then_raised(tmp_path):
     """execute() records the interruption, then raises it again: a loop of runs stops."""
     cfg = make_cfg("trajectory.duration=200", "task.progress=false")
-    timer = threading.Timer(3.0, lambda: os.kill(os.getpid(), signal.SIGINT))
-    timer.start()
+    done = threading.Event()
+
+    def press_ctrl_c() -> None:  # from 3 s on, once a second until the run has stopped
+        while not done.wait(3.0 if not sent else 1.0):
+            os.kill(os.getpid(), signal.SIGINT)
+            sent.append(time.monotonic())
+
+    sent: list[float] = []
+    presser = threading.Thread(target=press_ctrl_c, daemon=True)
+    presser.start()
     try:
         with pytest.raises(KeyboardInterrupt):
             execute(cfg, tmp_path, figures=False, echo=False)
     finally:
-        timer.cancel()
+        done.set()
+        presser.join()
     record = json.loads((tmp_path / "metrics.json").read_text())
     assert record["status"] == "interrupted" and record["steps"] > 0
     assert len(pd.read_parquet(tmp_path / "timeseries.parquet")) == record["steps"]
