@@ -4,6 +4,9 @@ from __future__ import annotations
 
 import subprocess
 import sys
+import warnings
+
+import pytest
 
 #: compile one law's numba kernel (control/jit.py) by running a few steps of it
 _WARM = (
@@ -39,3 +42,25 @@ def pytest_configure(config) -> None:
         _, err = proc.communicate(timeout=900)
         if proc.returncode:  # the tests of that law will report it; say why here too
             sys.stderr.write(f"compiling a kernel before the workers failed:\n{err.decode()[-2000:]}\n")
+
+
+_STOP_SIGNALS = ("SIGINT", "SIGTERM", "SIGHUP")
+
+
+@pytest.fixture(autouse=True)
+def _signal_handlers_left_as_found(request):
+    """Every test leaves the stop signals' handlers as it found them: one that does not is
+    named in a warning and its handlers are put back, so a later test in the same worker
+    process (the interruption tests) is not judged under a handler it never set."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    before = {name: signal.getsignal(getattr(signal, name)) for name in _STOP_SIGNALS}
+    yield
+    for name, handler in before.items():
+        if signal.getsignal(getattr(signal, name)) is not handler:
+            warnings.warn(f"{request.node.nodeid} left the {name} handler changed", stacklevel=1)
+            signal.signal(getattr(signal, name), handler)

@@ -157,18 +157,21 @@ def test_an_interrupted_run_in_python_is_recorded_then_raised(tmp_path):
             sent.append(time.monotonic())
 
     sent: list[float] = []
+    # Python's own Ctrl-C handler, whatever an earlier test in this process left behind
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
     presser = threading.Thread(target=press_ctrl_c, daemon=True)
     presser.start()
     try:
         with pytest.raises(KeyboardInterrupt):
             execute(cfg, tmp_path, figures=False, echo=False)
+        assert signal.getsignal(signal.SIGINT) is signal.default_int_handler  # handlers restored
     finally:
         done.set()
         presser.join()
+        signal.signal(signal.SIGINT, previous)
     record = json.loads((tmp_path / "metrics.json").read_text())
     assert record["status"] == "interrupted" and record["steps"] > 0
     assert len(pd.read_parquet(tmp_path / "timeseries.parquet")) == record["steps"]
-    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler  # handlers restored
 
 
 # --------------------------------------------------------------------------- MuJoCo's log
