@@ -254,6 +254,16 @@ class Audit:
             found += self._samples(approach, pose(deep), tilt)
         return found
 
+    def _approach(self, approach: str, pose, reach: float, tilt: Tilt) -> list[ContactSample]:
+        """Move the plug along ``pose(s)`` for s from 0 to ``reach`` until it first touches,
+        then press (:meth:`_press`); nothing when it touches at s = 0 already or not within
+        ``reach``."""
+        quat = tilt.quaternion()
+        if self._place(pose(0.0), quat) <= 0.0 or self._place(pose(reach), quat) > 0.0:
+            return []
+        touch = _first_touch(lambda s: self._place(pose(s), quat) <= 0.0, 0.0, reach)
+        return self._press(approach, pose, touch, 1e-5, tilt)
+
     def lateral(
         self,
         heights: Iterable[float],
@@ -269,15 +279,11 @@ class Audit:
             for azimuth in azimuths_deg:
                 u = np.array([math.cos(math.radians(azimuth)), math.sin(math.radians(azimuth)), 0.0])
                 for tilt in tilts:
-                    quat = tilt.quaternion()
 
                     def pose(e: float, h: float = h, u: np.ndarray = u) -> np.ndarray:
                         return np.array([0.0, 0.0, h]) + e * u
 
-                    if self._place(pose(0.0), quat) <= 0.0 or self._place(pose(reach), quat) > 0.0:
-                        continue
-                    touch = _first_touch(lambda e: self._place(pose(e), quat) <= 0.0, 0.0, reach)
-                    found += self._press("lateral", pose, touch, 1e-5, tilt)
+                    found += self._approach("lateral", pose, reach, tilt)
         return found
 
     def vertical(
@@ -290,15 +296,11 @@ class Audit:
             for azimuth in azimuths_deg:
                 u = np.array([math.cos(math.radians(azimuth)), math.sin(math.radians(azimuth)), 0.0])
                 for tilt in tilts:
-                    quat = tilt.quaternion()
 
                     def pose(down: float, e: float = e, u: np.ndarray = u) -> np.ndarray:
                         return np.array([0.0, 0.0, top - down]) + e * u
 
-                    if self._place(pose(0.0), quat) <= 0.0 or self._place(pose(top + 0.001), quat) > 0.0:
-                        continue
-                    touch = _first_touch(lambda z: self._place(pose(z), quat) <= 0.0, 0.0, top + 0.001)
-                    found += self._press("vertical", pose, touch, 1e-5, tilt)
+                    found += self._approach("vertical", pose, top + 0.001, tilt)
         return found
 
 
