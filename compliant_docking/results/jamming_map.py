@@ -20,6 +20,7 @@ import argparse
 import json
 import math
 import sys
+import textwrap
 from pathlib import Path
 
 import numpy as np
@@ -62,7 +63,7 @@ def cell_table(df: pd.DataFrame, bounds: MapBoundaries) -> pd.DataFrame:
     """One row per robot × controller × cell: ``x_low_mm``, ``x_high_mm``, ``tilt_low_deg``,
     ``tilt_high_deg``, ``jobs``, ``docked``, ``success_rate`` with ``wilson_low``/``_high``
     (a failed job counts as not docked) and ``theory`` (:meth:`MapBoundaries.region` at the
-    cell's centre; "mixed: a | b" when its corners disagree)."""
+    cell's centre; "mixed: a, b" when its corners disagree)."""
     x = _cell_bounds(df, X_KEY, X_RANGE, BIN_X) * 1e3
     tilt = _cell_bounds(df, TILT_KEY, TILT_RANGE, BIN_TILT)
     frame = pd.DataFrame(
@@ -88,7 +89,7 @@ def _region(bounds: MapBoundaries, x_low: float, x_high: float, t_low: float, t_
     centre = bounds.region(1e-3 * (x_low + x_high) / 2, (t_low + t_high) / 2)
     corners = {bounds.region(1e-3 * x, t) for x in (x_low, x_high) for t in (t_low, t_high)}
     others = sorted(corners - {centre})
-    return centre if not others else f"mixed: {centre} | {' | '.join(others)}"
+    return centre if not others else f"mixed: {', '.join([centre, *others])}"
 
 
 def _curves(bounds: MapBoundaries, tilts: np.ndarray):
@@ -111,10 +112,21 @@ def jamming_map_figure(cells: pd.DataFrame, bounds: MapBoundaries, out_dir: str 
     cols = list(dict.fromkeys(cells["controller"]))
     x_edges = np.unique(np.r_[cells["x_low_mm"], cells["x_high_mm"]])
     t_edges = np.unique(np.r_[cells["tilt_low_deg"], cells["tilt_high_deg"]])
-    width, height = 2.6 * len(cols) + 0.7, 2.1 * len(rows) + 1.5
+    width = 2.6 * len(cols) + 0.7
+    text = (
+        f"{int(cells['jobs'].sum())} jobs; cells: docked/jobs, colour = success rate (red 0, green 1). "
+        f"Theory (Whitney, our geometry), upright: funnel mouth ±{bounds.funnel_capture_m * 1e3:.2f} mm, "
+        f"chamfer ±{bounds.chamfer_capture_m * 1e3:.2f} mm (both move by −height·sin θ with the tilt); "
+        f"two-point contact before the seat above {bounds.two_point_tilt_deg:.2f}°; wedging above "
+        f"{_deg(bounds.wedging_tilt_deg)} (c/μ: {_deg(bounds.wedging_tilt_small_angle_deg)}). "
+        "A boundary outside the axes is not drawn."
+    )
+    lines = textwrap.wrap(text, int(30 * width))
+    below = 0.1 * len(lines) + 0.35  # the note, then the legend above it [in]
+    height = 2.1 * len(rows) + 0.95 + below
     fig, axes = plt.subplots(len(rows), len(cols), figsize=(width, height), squeeze=False, sharex=True,
                              sharey=True)  # fmt: skip
-    fig.subplots_adjust(left=0.55 / width, right=1 - 0.1 / width, bottom=1.25 / height, top=1 - 0.4 / height,
+    fig.subplots_adjust(left=0.55 / width, right=1 - 0.1 / width, bottom=(0.6 + below) / height, top=1 - 0.4 / height,
                         wspace=0.12, hspace=0.3)  # fmt: skip
     tilts = np.linspace(t_edges[0], t_edges[-1], 101)
     for r, robot in enumerate(rows):
@@ -133,7 +145,8 @@ def jamming_map_figure(cells: pd.DataFrame, bounds: MapBoundaries, out_dir: str 
                 x_edges, t_edges, rate, cmap="RdYlGn", vmin=0.0, vmax=1.0, alpha=0.55, shading="flat"
             )
             for label, style, curves in _curves(bounds, tilts):
-                for k, (xs, ts) in enumerate(curves):
+                shown = [(xs, ts) for xs, ts in curves if np.any((xs >= x_edges[0]) & (xs <= x_edges[-1]))]
+                for k, (xs, ts) in enumerate(shown):
                     ax.plot(xs, ts, label=label if k == 0 else None, **style)
             for value, label, style in (
                 (bounds.two_point_tilt_deg, "two-point contact before the seat (rigid)", {"color": "C3", "ls": "-."}),
@@ -153,14 +166,8 @@ def jamming_map_figure(cells: pd.DataFrame, bounds: MapBoundaries, out_dir: str 
         for handle, label in zip(*ax.get_legend_handles_labels()):
             handles.setdefault(label, handle)
     fig.legend(list(handles.values()), list(handles), loc="lower center", ncols=2,
-               bbox_to_anchor=(0.5, 0.42 / height))  # fmt: skip
-    plots.note(fig, [
-        f"{int(cells['jobs'].sum())} jobs; cells: docked/jobs, colour = success rate (red 0, green 1). Theory "
-        f"(Whitney, our geometry): funnel capture {bounds.funnel_capture_m * 1e3:.2f} mm, chamfer "
-        f"{bounds.chamfer_capture_m * 1e3:.2f} mm, two-point before the seat above {bounds.two_point_tilt_deg:.2f}°,",
-        f"wedging above {_deg(bounds.wedging_tilt_deg)} (c/μ: {_deg(bounds.wedging_tilt_small_angle_deg)}); "
-        "a line outside the axes is not drawn",
-    ])  # fmt: skip
+               bbox_to_anchor=(0.5, (below - 0.25) / height))  # fmt: skip
+    plots.note(fig, lines)
     fig.suptitle(title)
     plots.save_figure(fig, out_dir, stem)
     return fig

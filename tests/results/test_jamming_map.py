@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import pandas as pd
 import pytest
@@ -44,7 +42,7 @@ def test_cells_are_the_drawn_ranges_with_wilson_intervals(bounds):
     assert cell["success_rate"] == 0.75
     assert (cell["wilson_low"], cell["wilson_high"]) == pytest.approx(wilson(3, 4), rel=1e-12)
     # the centre (1 mm, 0.5°) lands on the chamfer; the corner (2 mm, 1°) past its 1.61 mm: the funnel
-    assert cell["theory"] == "mixed: chamfer | funnel"
+    assert cell["theory"] == "mixed: chamfer, funnel"
     assert cells.loc[("impedance", 2.0), "theory"] == "two-point"  # 2–3°, all over 1.72°
     assert (cells.loc[("hqp", 0.0), "jobs"], cells.loc[("hqp", 0.0), "docked"]) == (1, 1)
 
@@ -58,8 +56,8 @@ def test_without_drawn_ranges_jobs_are_binned_1_mm_by_1_degree(bounds):
 
 def test_the_figure_draws_the_theory_where_it_says(bounds, monkeypatch):
     """The chamfer's lines pass through ±2.13 mm upright; the two-point line at 1.72°; the
-    funnel mouth (±10.8 mm) and wedging (11.7°) lie outside these axes and are drawn beyond
-    them (clipped) or not at all."""
+    funnel mouth (±10.8 mm) and wedging (11.7°) lie outside these axes and are not drawn,
+    until the map reaches the mouth (+10.79 mm upright)."""
     monkeypatch.setattr("compliant_docking.results.plots.save_figure", lambda *a, **k: [])
     df = jobs()
     df.loc[len(df)] = df.loc[0].copy()
@@ -75,7 +73,13 @@ def test_the_figure_draws_the_theory_where_it_says(bounds, monkeypatch):
     assert upright == pytest.approx([-2.132, 2.132], abs=1e-3)
     two_point = lines["two-point contact before the seat (rigid)"]
     assert float(np.asarray(two_point.get_ydata())[0]) == pytest.approx(bounds.two_point_tilt_deg)
-    assert "wedging (l < μd)" not in lines
-    funnel = lines["funnel mouth (capture)"]
-    assert float(funnel.get_xdata()[0]) == pytest.approx(-bounds.funnel_capture_m * 1e3, rel=1e-9)
-    assert not math.isnan(ax.get_xlim()[0]) and ax.get_xlim() == pytest.approx((-6.0, 2.0))
+    assert "wedging (l < μd)" not in lines and "funnel mouth (capture)" not in lines
+    assert ax.get_xlim() == pytest.approx((-6.0, 2.0)) and ax.get_ylim() == pytest.approx((0.0, 5.0))
+    wide = df.copy()
+    wide.loc[0, "task.misalignment.x_range"] = "[0.008,0.012]"  # the mouth, 7.63 mm at 4°, in view
+    funnel = {
+        line.get_label(): line
+        for line in jamming_map_figure(cell_table(wide, bounds), bounds).axes[0].get_lines()
+    }
+    ends = funnel["funnel mouth (capture)"]
+    assert float(ends.get_xdata()[0]) == pytest.approx(bounds.funnel_capture_m * 1e3, rel=1e-9)
