@@ -128,3 +128,31 @@ def test_the_controller_gets_the_modelled_reading_and_the_log_keeps_both():
     expected = _respond(SensorModel.from_settings(cfg.sensor, DT), sim.telemetry.wrench[:n])
     np.testing.assert_array_equal(sensed, expected)
     assert np.abs(sensed - sim.telemetry.wrench[:n]).max() > 0.05  # the noise is there
+
+
+def test_force_feedback_amplifies_a_sensor_bias_by_the_inertia_ratio():
+    """A bias δ is no force on the arm: with the impedance law's force feedback the arm
+    obeys Λ ë = Λ a − δ with a = W⁻¹(δ + K e + D ė), so at rest K e = (W Λ⁻¹ − I) δ — not
+    K e = δ (docs/robustness.md). Held in free space (no gravity, no floor on W), the TCP
+    settles where that formula says, many times b/k away."""
+    bias = np.array([0.2, 0.0, 0.0])
+    cfg = make_cfg(
+        *FREE_SPACE_HOLD,
+        "controller.k=400",
+        "controller.d=126.49",
+        "controller.apparent_inertia_floor=null",
+        "task.duration=2.5",
+        f"sensor.force_bias_N=[{bias[0]},{bias[1]},{bias[2]}]",
+    )
+    sim = prepare(cfg)
+    sim.run()
+    last = sim.telemetry.count - 1
+    arm = sim.scene.arm
+    arm.update(sim.telemetry.q[last].copy(), np.zeros(arm.nv))
+    task_inertia = np.linalg.inv(arm.J @ arm.Minv @ arm.J.T)
+    W = np.diag([10.0] * 3 + [1.0] * 3)  # conf/controller/impedance.yaml: m, m_rot
+    K = np.diag([400.0] * 3 + [25.0] * 3)
+    predicted = np.linalg.solve(K, (W @ np.linalg.inv(task_inertia) - np.eye(6)) @ np.r_[bias, 0, 0, 0])
+    offset = sim.reference.pos[last] - arm.pos  # e = x_d − x
+    assert np.linalg.norm(offset) > 3 * bias[0] / 400.0  # amplified, not b/k
+    np.testing.assert_allclose(offset, predicted[:3], atol=0.02 * np.linalg.norm(predicted[:3]))
