@@ -156,3 +156,21 @@ def test_force_feedback_amplifies_a_sensor_bias_by_the_inertia_ratio():
     offset = sim.reference.pos[last] - arm.pos  # e = x_d − x
     assert np.linalg.norm(offset) > 3 * bias[0] / 400.0  # amplified, not b/k
     np.testing.assert_allclose(offset, predicted[:3], atol=0.02 * np.linalg.norm(predicted[:3]))
+
+
+def test_the_encoders_noise_reaches_the_controller_s_model_not_the_log():
+    """joint_position_noise_rad / joint_velocity_noise_rad_s: the controller's arm model is
+    updated with q + σ_q ε, v + σ_v ε of that step (seeded), the log keeps the true q, v."""
+    cfg = make_cfg(
+        *FREE_SPACE_HOLD,
+        "task.duration=0.02",
+        "sensor.joint_position_noise_rad=0.001",
+        "sensor.joint_velocity_noise_rad_s=0.01",
+    )
+    sim = prepare(cfg)
+    sim.run()
+    last = sim.telemetry.count - 1
+    arm, sensing = sim.scene.arm, sim.sensing
+    np.testing.assert_array_equal(arm.q, sim.telemetry.q[last] + sensing.q_noise[last])
+    np.testing.assert_array_equal(arm.v, sim.telemetry.v[last] + sensing.v_noise[last])
+    assert 0.0005 < sensing.q_noise.std() < 0.002 and 0.005 < sensing.v_noise.std() < 0.02
