@@ -23,6 +23,8 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
+from compliant_docking.sim.misalignment import uniform_draw
+
 #: the drawn quantities, in the order of their random streams (300 + index)
 QUANTITIES = ("friction", "timeconst", "dampratio", "width")
 #: flat keys recorded in metrics.json (null when nothing is drawn)
@@ -80,9 +82,7 @@ def draw(settings) -> ContactDraw:
     for index, name in enumerate(QUANTITIES):
         bounds = settings.get(f"{name}_range")
         if bounds is not None:
-            rng = np.random.default_rng(np.random.SeedSequence([seed, 300 + index]))
-            low, high = float(bounds[0]), float(bounds[1])
-            values[name] = low + (high - low) * float(rng.random())
+            values[name] = uniform_draw(seed, 300 + index, float(bounds[0]), float(bounds[1]))
     return ContactDraw(**values, seed=seed if values else None)
 
 

@@ -25,6 +25,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from compliant_docking.config.robustness import MODEL_ERROR_SCALARS
+from compliant_docking.sim.misalignment import uniform_draw
 
 #: the scalar quantities, in the order of their random streams (100 + index)
 SCALARS = tuple(name for name, _ in MODEL_ERROR_SCALARS)
@@ -97,11 +98,6 @@ class ModelError:
         return out
 
 
-def _uniform(seed: int, stream: int, low: float, high: float) -> float:
-    rng = np.random.default_rng(np.random.SeedSequence([int(seed), stream]))
-    return low + (high - low) * float(rng.random())
-
-
 def draw(settings) -> ModelError:
     """The model error of ``settings`` (the ``model_error`` node; None: exact). Fixed values
     pass through; a quantity with a ``*_range`` is drawn uniformly from it."""
@@ -115,13 +111,13 @@ def draw(settings) -> ModelError:
         if bounds is None:
             values[name] = float(settings.get(name, 1.0))
         else:
-            values[name] = _uniform(seed, 100 + index, float(bounds[0]), float(bounds[1]))
+            values[name] = uniform_draw(seed, 100 + index, float(bounds[0]), float(bounds[1]))
             drawn = True
     bounds = settings.get("tool_com_offset_m_range")
     if bounds is None:
         com = tuple(float(c) for c in settings.get("tool_com_offset_m", (0.0, 0.0, 0.0)))
     else:
-        com = tuple(_uniform(seed, s, float(bounds[0]), float(bounds[1])) for s in COM_STREAMS)
+        com = tuple(uniform_draw(seed, s, float(bounds[0]), float(bounds[1])) for s in COM_STREAMS)
         drawn = True
     return ModelError(**values, tool_com_offset=com, seed=seed if drawn else None)  # type: ignore[arg-type]
 
