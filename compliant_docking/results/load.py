@@ -39,7 +39,19 @@ OVERRIDDEN = "overridden"
 #: prefix of a config leaf whose dotted name is already a metrics.json key
 CONFIG_PREFIX = "config."
 #: the config groups whose choice names a job (also recorded in metrics.json)
-GROUPS = ("robot", "controller", "trajectory", "tool", "target", "physics", "task", "experiment")
+GROUPS = (
+    "robot",
+    "controller",
+    "trajectory",
+    "tool",
+    "target",
+    "physics",
+    "task",
+    "sensor",
+    "model_error",
+    "dynamics",
+    "experiment",
+)
 
 
 class RunSkippedWarning(UserWarning):
