@@ -87,6 +87,7 @@ def test_bash_completes_groups_options_and_keys(tmp_path):
 
     assert complete("compliant-docking controller=") == [
         "controller=hqp",
+        "controller=hqp_observer",
         "controller=impedance",
         "controller=se3_lie",
     ]
