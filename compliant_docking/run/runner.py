@@ -300,18 +300,7 @@ def job_identity(cfg: DictConfig) -> dict:
         identity["overrides"] = " ".join(hc.overrides.task) or None
     except ValueError:  # not running under Hydra
         choices = {}
-    for group in (
-        "robot",
-        "controller",
-        "trajectory",
-        "tool",
-        "target",
-        "physics",
-        "task",
-        "sensor",
-        "model_error",
-        "dynamics",
-    ):
+    for group in rundir.IDENTITY_GROUPS:
         identity[group] = choices.get(group) or _name(cfg, group)
     return identity
 
