@@ -13,6 +13,11 @@ is the code's speed, the median what a user sees). It also times the whole comma
 
     python benchmarks/loop_speed.py                      # all controllers, iiwa14 and fr3
     python benchmarks/loop_speed.py --controllers impedance --robots fr3
+    python benchmarks/loop_speed.py --versus sensor=wrist_ft   # the cost of an option
+
+``--versus OVERRIDE…`` also runs every configuration with these overrides, alternating
+with the plain runs in this process, and prints the ratio of the loop's time per step
+(versus / plain; best against best and median against median).
 
 benchmarks/step_profile.py splits a step's time into its parts (Pinocchio update,
 controller, physics, the loop's own bookkeeping).
@@ -69,8 +74,13 @@ def main() -> int:
     parser.add_argument("--robots", nargs="+", default=["iiwa14", "fr3"])
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--no-cli", action="store_true", help="skip timing the whole command")
+    parser.add_argument(
+        "--versus", nargs="+", default=None, help="overrides of a second configuration to compare"
+    )
     parser.add_argument("overrides", nargs="*", help="extra Hydra overrides for every run")
     args = parser.parse_args()
+    if args.versus:
+        return compare(args)
 
     print(
         f"{'robot':8} {'controller':11} {'RTF best':>9} {'RTF median':>11} {'loop µs':>8} "
@@ -102,6 +112,26 @@ def main() -> int:
             f"(target < {CLI_TARGET_S:g} s: {'met' if wall <= CLI_TARGET_S else 'MISSED'})"
         )
     return 1 if failures else 0
+
+
+def compare(args) -> int:
+    """Loop time per step with ``--versus`` against without, alternating runs in this process."""
+    print(f"versus: {' '.join(args.versus)}")
+    print(
+        f"{'robot':8} {'controller':13} {'plain µs':>9} {'versus µs':>10} {'ratio best':>11} {'ratio median':>13}"
+    )
+    for robot in args.robots:
+        for controller in args.controllers:
+            base = [f"robot={robot}", f"controller={controller}", *args.overrides]
+            plain, versus = [], []
+            for _ in range(args.repeats):
+                plain.append(measure(base)[1])
+                versus.append(measure([*base, *args.versus])[1])
+            print(
+                f"{robot:8} {controller:13} {min(plain):9.1f} {min(versus):10.1f} "
+                f"{min(versus) / min(plain):11.3f} {statistics.median(versus) / statistics.median(plain):13.3f}"
+            )
+    return 0
 
 
 if __name__ == "__main__":

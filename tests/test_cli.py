@@ -46,7 +46,8 @@ def test_console_script_help_is_the_module_help():
     assert script.stdout == module.stdout  # one command, two spellings
     # every group on one line with its options, the default first
     for group, options in (
-        ("controller", "impedance, hqp, se3_lie"),
+        ("controller", "impedance, hqp, hqp_observer, se3_lie"),
+        ("sensor", "ideal, wrist_ft"),
         ("robot", "iiwa14, fr3"),
         ("trajectory", "quintic"),
         ("experiment", "controller_comparison"),
@@ -86,6 +87,7 @@ def test_bash_completes_groups_options_and_keys(tmp_path):
 
     assert complete("compliant-docking controller=") == [
         "controller=hqp",
+        "controller=hqp_observer",
         "controller=impedance",
         "controller=se3_lie",
     ]

@@ -44,6 +44,7 @@ from compliant_docking.config.ranges import (
     positive,
     within,
 )
+from compliant_docking.config.robustness import DynamicsConfig, ModelErrorConfig, SensorConfig
 
 
 # --------------------------------------------------------------------------- robot
@@ -419,6 +420,9 @@ class Config:
     trajectory: Any = MISSING  # one of the planner schemas
     task: TaskConfig = MISSING
     render: Any = MISSING  # NoRenderConfig or RenderConfig
+    sensor: SensorConfig = MISSING  # what the controller's F/T sensor and encoders read
+    model_error: ModelErrorConfig = MISSING  # the controller's model against the plant
+    dynamics: DynamicsConfig = MISSING  # the plant's contact drawn per seed
     viewer: bool = MISSING  # MuJoCo's interactive viewer, paced to real time (one run, a display)
     # per-run figures (figures/): null = a single run draws them, a sweep job does not;
     # true / false: always / never (`python -m compliant_docking.report PATH --runs` draws them later)

@@ -16,6 +16,7 @@ from compliant_docking.config.compose_cache import install as install_compose_ca
 from compliant_docking.config.env import EnvConfig
 from compliant_docking.config.geometry import ContactParams, PlugGeometry, SocketGeometry
 from compliant_docking.config.keyed import KeyedPlugGeometry, KeyedSocketGeometry
+from compliant_docking.config.robustness import DynamicsConfig, ModelErrorConfig, SensorConfig
 from compliant_docking.config.schemas import (
     Config,
     HoldConfig,
@@ -54,6 +55,9 @@ _SCHEMAS: dict[str, dict[str, type]] = {
     },
     "task": {"task": TaskConfig},
     "render": {"none": NoRenderConfig, "video": RenderConfig},
+    "sensor": {"sensor": SensorConfig},
+    "model_error": {"model_error": ModelErrorConfig},
+    "dynamics": {"dynamics": DynamicsConfig},
 }
 
 

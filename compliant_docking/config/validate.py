@@ -41,7 +41,7 @@ from typing import Any
 from omegaconf import DictConfig, ListConfig, OmegaConf
 
 from compliant_docking import CONF_DIR
-from compliant_docking.config import geometry, keyed
+from compliant_docking.config import geometry, keyed, robustness
 from compliant_docking.config.memory import memory_problem
 from compliant_docking.config.ranges import field_range, problems, show
 from compliant_docking.config.schemas import Config
@@ -289,6 +289,7 @@ def _relations(cfg: DictConfig) -> list[str]:
             f"task.insertion_overshoot happens while the run settles); got {press:g}."
         )
     found += _misalignment(cfg, has_target)
+    found += robustness.problems(cfg)  # sensor, model_error, dynamics
     found += _interface(cfg, has_target)
     found += _files(cfg, has_target)
     eps_abs, max_torque = _get(cfg, "controller.eps_abs"), _get(cfg, "robot.max_torque")

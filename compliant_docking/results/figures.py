@@ -37,6 +37,7 @@ from compliant_docking.results.success_figures import (
     MISALIGNMENT_AXES,
     misalignment_components,
     success_map,
+    success_vs_error,
     success_vs_misalignment,
 )
 from compliant_docking.results.tables import NOT_MEASURED, configuration_keys, configuration_labels
@@ -51,6 +52,7 @@ __all__ = [
     "plot_comparison",
     "save_figure",
     "success_map",
+    "success_vs_error",
     "success_vs_misalignment",
 ]
 
@@ -180,6 +182,7 @@ def plot_comparison(df: pd.DataFrame, out_dir: str | Path, formats: Sequence[str
     saved: list[Path] = []
     makers: list[tuple[Callable[[pd.DataFrame], Any], str]] = [
         (success_vs_misalignment, "success_vs_misalignment"),
+        (success_vs_error, "success_vs_error"),
         (success_map, "success_map"),
         (force_overlay, "force_overlay"),
     ]

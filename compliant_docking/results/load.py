@@ -26,6 +26,7 @@ import pandas as pd
 from compliant_docking.run.rundir import (
     CONFIG_FILE,
     HYDRA_DIR,
+    IDENTITY_GROUPS,
     MULTIRUN_FILE,
     find_job_dirs,
     read_metrics,
@@ -39,7 +40,7 @@ OVERRIDDEN = "overridden"
 #: prefix of a config leaf whose dotted name is already a metrics.json key
 CONFIG_PREFIX = "config."
 #: the config groups whose choice names a job (also recorded in metrics.json)
-GROUPS = ("robot", "controller", "trajectory", "tool", "target", "physics", "task", "experiment")
+GROUPS = (*IDENTITY_GROUPS, "experiment")
 
 
 class RunSkippedWarning(UserWarning):

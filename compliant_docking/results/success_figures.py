@@ -1,9 +1,12 @@
-"""Success against the drawn socket misalignment.
+"""Success against the drawn socket misalignment, and against the drawn model, sensor and
+contact errors.
 
 - :func:`success_vs_misalignment`: per varying component (lateral distance, yaw magnitude, tilt),
   the success rate per bin of draws with its Wilson 95 % interval, one line per controller,
   and below it every job's first-strike force (else its peak axial force), filled when
   it docked;
+- :func:`success_vs_error`: the same against the size of each drawn error of the controller's
+  model, its sensor and the plant's contact (the robustness groups);
 - :func:`success_map`: the 2-D map over lateral × tilt error for each controller (rows:
   robots), in the manner of Whitney's jamming/wedging diagrams for peg-in-hole insertion:
   cells coloured by the success rate of the draws in them (docked/jobs written in each),
@@ -31,6 +34,15 @@ MISALIGNMENT_AXES = (
     ("misalignment_lateral_m", "lateral error [mm]", 1e3),
     ("misalignment_yaw_deg", "yaw error, magnitude [deg]", 1.0),
     ("misalignment_tilt_deg", "tilt error [deg]", 1.0),
+)
+#: drawn errors of the robustness groups: (metrics.json key, axis label, scale to the shown
+#: unit, the neutral value the size is measured from)
+ERROR_AXES = (
+    ("model_error_tool_mass_kg", "payload error |Δm| [g]", 1e3, 0.0),
+    ("model_error_link_mass_scale", "link mass error [%]", 100.0, 1.0),
+    ("sensor_force_bias_N", "F/T force bias |b| [N]", 1.0, 0.0),
+    ("contact_friction", "contact friction μ", 1.0, 0.0),
+    ("contact_timeconst", "contact time constant [ms]", 1e3, 0.0),
 )
 #: how a draw ended, with its marker: (name, marker, face colour)
 OUTCOMES = {
@@ -110,9 +122,36 @@ def success_vs_misalignment(
 ):
     """Success rate with Wilson intervals (top) and the strike force of every job (bottom)
     against each varying misalignment component; None when none varies (module doc)."""
-    components = misalignment_components(df)
+    components = [(key, label, scale, 0.0) for key, label, scale in misalignment_components(df)]
     if not components:
         return None
+    return _success_against(df, components, "docking against socket misalignment", out_dir, stem)
+
+
+def error_components(df: pd.DataFrame) -> list[tuple[str, str, float, float]]:
+    """The drawn model, sensor and contact errors (:data:`ERROR_AXES`) that vary in ``df``."""
+    found = []
+    for key, label, scale, neutral in ERROR_AXES:
+        if key in df and pd.to_numeric(df[key], errors="coerce").round(12).nunique() > 1:
+            found.append((key, label, scale, neutral))
+    return found
+
+
+def success_vs_error(df: pd.DataFrame, out_dir: str | Path | None = None, stem: str = "success_vs_error"):
+    """As :func:`success_vs_misalignment`, against the size of each drawn error of the
+    controller's model, its sensor and the plant's contact (``model_error``, ``sensor``,
+    ``dynamics``); None when none varies."""
+    components = error_components(df)
+    if not components:
+        return None
+    return _success_against(
+        df, components, "docking against what the controller does not know", out_dir, stem
+    )
+
+
+def _success_against(df, components, title: str, out_dir, stem: str):
+    """The success-rate and force panels against each component (key, label, scale, neutral):
+    x = |value − neutral| × scale."""
     plt = plots.comparison_style()
     series_key, series, pooled = _series(df)
     force_key = "first_strike_force_N" if "first_strike_force_N" in df else "peak_axial_force_N"
@@ -128,8 +167,8 @@ def success_vs_misalignment(
         if force_key in df
         else np.full(len(df), np.nan)
     )
-    for c, (key, label, scale) in enumerate(components):
-        x_all = pd.to_numeric(df[key], errors="coerce").abs().to_numpy() * scale
+    for c, (key, label, scale, neutral) in enumerate(components):
+        x_all = (pd.to_numeric(df[key], errors="coerce") - neutral).abs().to_numpy() * scale
         finite = np.isfinite(x_all)
         edges = _bins(x_all[finite])
         width_bin = np.min(np.diff(edges))
@@ -175,7 +214,7 @@ def success_vs_misalignment(
             f"pooled over: {', '.join(pooled)}" if pooled else "",
         ],
     )
-    fig.suptitle("docking against socket misalignment")
+    fig.suptitle(title)
     plots.save_figure(fig, out_dir, stem)
     return fig
 

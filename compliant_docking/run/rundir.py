@@ -43,6 +43,19 @@ MUJOCO_LOG_FILE = "mujoco.log"  # MuJoCo's warnings, when there were any
 HYDRA_DIR = ".hydra"
 CONFIG_FILE = "config.yaml"  # in HYDRA_DIR: the job's composed config
 OVERRIDES_FILE = "overrides.yaml"  # in HYDRA_DIR: the job's command-line overrides
+#: the config groups whose choice names a job in its record (metrics.json)
+IDENTITY_GROUPS = (
+    "robot",
+    "controller",
+    "trajectory",
+    "tool",
+    "target",
+    "physics",
+    "task",
+    "sensor",
+    "model_error",
+    "dynamics",
+)
 #: the sweep directory's record of the sweep (Hydra writes it)
 MULTIRUN_FILE = "multirun.yaml"
 #: statuses of a job that did not finish its simulation: never docked, whatever else its record says

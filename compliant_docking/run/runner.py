@@ -25,6 +25,7 @@ from compliant_docking.evaluation.registry import CONTACT_KEYS, DOCKING_KEYS
 from compliant_docking.run import figures as run_figures
 from compliant_docking.run import interrupt, provenance, rundir
 from compliant_docking.run.summary import display_path, format_summary
+from compliant_docking.sim import dynamics, model_error, sensor
 from compliant_docking.sim.misalignment import record_for as misalignment_record
 
 #: exit status of ``python -m compliant_docking``
@@ -91,6 +92,8 @@ def execute(
     record.update(dict.fromkeys(DOCKING_KEYS))
     record.update(dict.fromkeys(CONTACT_KEYS), gate_verdict=None)
     record.update(misalignment_record(cfg))  # true vs believed socket pose (flat keys)
+    # what the controller does not know: its model, its sensors; the plant's contact draw
+    record.update(model_error.record_for(cfg), **sensor.record_for(cfg), **dynamics.record_for(cfg))
     sim = None
     interrupted: KeyboardInterrupt | None = None
     with mjlog.captured() as mujoco_warnings:  # never MUJOCO_LOG.TXT in the working directory
@@ -129,6 +132,7 @@ def execute(
         if sim is not None:
             steps = sim.telemetry.count
             record["sim_time_s"] = steps * sim.scene.model.opt.timestep
+            record.update(model_error.record_for(cfg, sim.scene.arm.tool.mass))  # + believed − true mass
             record["steps"] = steps
             record["real_time_factor"] = (
                 record["sim_time_s"] / sim.loop_wall_time if sim.loop_wall_time > 0 else None
@@ -189,6 +193,8 @@ def evaluate(sim, out_dir: Path | None, *, figures: bool) -> dict:
 
     cfg, arm = sim.cfg, sim.scene.arm
     extras = sim.controller.timeseries()
+    if sim.sensing is not None:  # the controller's F/T reading beside the exact wrench
+        extras = {**extras, **sim.sensing.timeseries(sim.telemetry.count)}
     ts = sim.telemetry.frame(arm, sim.reference, np.asarray(cfg.robot.max_torque, float), extras)
     manip = M.manipulability_series(arm, sim.telemetry.q[: sim.telemetry.count])
     axis = sim.waypoints.axis
@@ -297,7 +303,7 @@ def job_identity(cfg: DictConfig) -> dict:
         identity["overrides"] = " ".join(hc.overrides.task) or None
     except ValueError:  # not running under Hydra
         choices = {}
-    for group in ("robot", "controller", "trajectory", "tool", "target", "physics", "task"):
+    for group in rundir.IDENTITY_GROUPS:
         identity[group] = choices.get(group) or _name(cfg, group)
     return identity
 

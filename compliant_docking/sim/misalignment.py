@@ -92,6 +92,13 @@ class Misalignment:
         }
 
 
+def uniform_draw(seed: int, stream: int, low: float, high: float) -> float:
+    """One uniform draw in [low, high] from the random stream ``SeedSequence([seed, stream])``:
+    every drawn quantity of a run (misalignment, model error, contact) has its own stream."""
+    rng = np.random.default_rng(np.random.SeedSequence([int(seed), stream]))
+    return low + (high - low) * float(rng.random())
+
+
 def empty_record() -> dict:
     """The misalignment keys of a run without a socket (or before the scene exists)."""
     return dict.fromkeys(RECORD_KEYS)
@@ -140,9 +147,7 @@ def draw(settings) -> Misalignment:
             raise ValueError(
                 f"task.misalignment.seed must be an integer >= 0 to draw task.misalignment.{name}, got {seed}"
             )
-        rng = np.random.default_rng(np.random.SeedSequence([int(seed), index]))
-        low, high = bounds
-        values[name] = low + (high - low) * float(rng.random())
+        values[name] = uniform_draw(int(seed), index, *bounds)
         drawn = True
     if abs(values["tilt_deg"]) >= MAX_TILT_DEG:
         raise ValueError(

@@ -12,6 +12,7 @@ and wrenches are ``[linear; angular]``.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -47,9 +48,19 @@ class ArmModel:
     """
 
     def __init__(
-        self, mjcf_path: str | Path, ee_site: str, mount: pin.SE3, tool: RigidTool, gravity: np.ndarray
+        self,
+        mjcf_path: str | Path,
+        ee_site: str,
+        mount: pin.SE3,
+        tool: RigidTool,
+        gravity: np.ndarray,
+        adjust: Callable[[pin.Model], None] | None = None,
     ):
+        """``adjust``: changes the arm's model in place before the tool is appended (a
+        controller's believed link inertias: compliant_docking/sim/model_error.py)."""
         model = pin.buildModelFromMJCF(str(mjcf_path))
+        if adjust is not None:
+            adjust(model)
         if not model.existFrame(ee_site):
             raise ValueError(
                 f"robot.ee_site {ee_site!r} is not a site of {mjcf_path}; "

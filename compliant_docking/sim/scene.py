@@ -33,6 +33,7 @@ from omegaconf import DictConfig, OmegaConf
 from compliant_docking import looked_in, resolve_path
 from compliant_docking.config.geometry import PlugGeometry, SocketGeometry, check_fit
 from compliant_docking.config.keyed import KeyedPlugGeometry, KeyedSocketGeometry, check_keyed_fit
+from compliant_docking.sim.dynamics import draw as contact_draw
 from compliant_docking.sim.geometry import build_plug, build_socket
 from compliant_docking.sim.geometry.fragment import Key, read_key
 from compliant_docking.sim.geometry.keyed import build_keyed_plug, build_keyed_socket
@@ -319,6 +320,10 @@ def build_scene(cfg: DictConfig) -> Scene:
     )
     _set_physics(arm_spec, cfg.physics)
     model = arm_spec.compile()
+    if socket is not None:  # the plant's contact drawn per seed (dynamics=randomised)
+        contact_draw(cfg.get("dynamics")).apply(
+            model, [model.body(f"{cfg.tool.prefix}dock").id, model.body(f"{cfg.target.prefix}dock").id]
+        )
 
     if model.sensor("torque_sensor").adr[0] != model.sensor("force_sensor").adr[0] + 3:
         raise RuntimeError("force and torque sensors must be adjacent in sensordata")

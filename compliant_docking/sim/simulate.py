@@ -31,9 +31,11 @@ from compliant_docking.planning.base import (
     ReferenceTable,
     Waypoints,
 )
+from compliant_docking.sim import model_error
 from compliant_docking.sim.context import ControlContext, StepController
+from compliant_docking.sim.models import ArmModel
 from compliant_docking.sim.scene import Scene, build_scene
-from compliant_docking.sim.sensor import wrench_reader
+from compliant_docking.sim.sensor import Sensing, sensing, wrench_reader
 from compliant_docking.sim.task import run_duration, task_waypoints
 from compliant_docking.sim.telemetry import Telemetry
 
@@ -64,6 +66,10 @@ class Simulation:
     loop_wall_time: float = 0.0
     notes: list[str] = field(default_factory=list)
     reference: ReferenceTable | None = None  # the planner's table, made by start()
+    # the controller's own arm model (model_error); None: the plant's, scene.arm
+    arm: ArmModel | None = None
+    # what the controller reads (sensor, a believed payload); None: the exact wrench and state
+    sensing: Sensing | None = None
     steps_done: int = 0  # steps simulated so far: the index of the next one
     # the wrench handed to the controller at the last step (start() makes it)
     wrench: np.ndarray = field(default_factory=lambda: np.zeros(6), init=False)
@@ -102,8 +108,16 @@ class Simulation:
         """
         model, data = self.scene.model, self.data
         dt = model.opt.timestep
-        wrench = np.zeros(6)
-        read_wrench = wrench_reader(self.scene, data, wrench)
+        arm = self.scene.arm if self.arm is None else self.arm
+        measured = np.zeros(6)  # the exact wrench (logged: the metrics judge it)
+        update: Callable[[np.ndarray, np.ndarray], None]
+        if self.sensing is None:  # the ideal sensors: the controller reads the exact wrench
+            wrench, update = measured, arm.update
+            read_wrench = wrench_reader(self.scene, data, wrench)
+        else:
+            wrench = np.zeros(6)
+            read_wrench = self.sensing.reader(self.scene, data, measured, wrench)
+            update = self.sensing.updater(arm)
         reporter = _Progress(self.n_steps, dt, enabled=progress)
         start = time.perf_counter()
         # The planner's work is part of the loop's time: its table of every step first.
@@ -112,8 +126,8 @@ class Simulation:
         log = self.telemetry
         # bound once: MuJoCo's arrays are views made at each attribute access
         self._loop = (
-            (read_wrench, reporter, on_step, Reference(), self.reference.row, wrench),
-            (model, data, self.scene.arm, log, dt),
+            (read_wrench, reporter, on_step, Reference(), self.reference.row, wrench, measured),
+            (model, data, arm, update, log, dt),
             (data.qpos, data.qvel, data.ctrl, log.state, log.wrench, log.contacts),
             data.warning[mujoco.mjtWarning.mjWARN_BADQACC],
         )
@@ -125,7 +139,7 @@ class Simulation:
         the loop reads it again at the step, so reading it here changes nothing)."""
         if self._loop is None:
             raise RuntimeError("Simulation.sense_wrench needs Simulation.start() first")
-        self._loop[0][0]()
+        self._loop[0][0](self.steps_done)
         return self.wrench
 
     def advance(self, n: int) -> int:
@@ -141,22 +155,25 @@ class Simulation:
             raise RuntimeError("Simulation.advance needs Simulation.start() first")
         first = self.steps_done
         last = min(first + max(int(n), 0), self.n_steps)
-        (read_wrench, reporter, on_step, ref, row, wrench), (model, data, arm, log, dt), arrays, bad_qacc = (
-            self._loop
-        )
+        (
+            (read_wrench, reporter, on_step, ref, row, wrench, measured),
+            (model, data, arm, update, log, dt),
+            arrays,
+            bad_qacc,
+        ) = self._loop
         qpos, qvel, ctrl, log_state, log_w, log_contacts = arrays
         get_state, state_spec = mujoco.mj_getState, STATE_LOGGED
-        mj_step, update, compute = mujoco.mj_step, arm.update, self.controller.compute
+        mj_step, compute = mujoco.mj_step, self.controller.compute
         start = time.perf_counter()
         for k in range(first, last):
             t = k * dt
             update(qpos, qvel)
             row(k, ref)
-            read_wrench()
+            read_wrench(k)
             tau = compute(t, arm, ref, wrench)
             ctrl[:] = tau
             get_state(model, data, log_state[k], state_spec)  # [q, v, command]
-            log_w[k] = wrench
+            log_w[k] = measured
             log_contacts[k] = data.ncon
             mj_step(model, data)
             if on_step is not None:
@@ -276,15 +293,21 @@ def prepare(cfg: DictConfig) -> Simulation:
     too_large = memory_problem(cfg, n_steps=n_steps)  # before the logs are allocated
     if too_large:
         raise ValueError(too_large)
+    # what the controller does not know: its own model (model_error) and its sensors (sensor)
+    error = model_error.draw(cfg.get("model_error"))
+    believed = model_error.believed_arm(cfg, scene, error)
+    sensors = sensing(
+        cfg, float(model.opt.timestep), n_steps, nv, believed.tool if error.tool_changed else None
+    )
     context = ControlContext(
-        arm=arm,
+        arm=arm if believed is None else believed,
         dt=float(model.opt.timestep),
         n_steps=n_steps,
         q_home=q0.copy(),
         velocity_limits=np.asarray(cfg.robot.velocity_limits, dtype=float),
         torque_limits=np.asarray(cfg.robot.max_torque, dtype=float),
-        joint_friction=model.dof_frictionloss.copy(),
-        joint_damping=model.dof_damping.copy(),
+        joint_friction=model.dof_frictionloss * error.friction_scale,
+        joint_damping=model.dof_damping * error.damping_scale,
         axis=waypoints.axis,
     )
     controller = instantiate(cfg.controller, _partial_=True, _convert_="all")(context=context)
@@ -300,6 +323,8 @@ def prepare(cfg: DictConfig) -> Simulation:
         n_steps=n_steps,
         telemetry=Telemetry(n_steps, nv, model.opt.timestep),
         notes=notes,
+        arm=believed,
+        sensing=sensors,
     )
 
 

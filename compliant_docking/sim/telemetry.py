@@ -57,8 +57,10 @@ COLUMN_DOCS = {
     "pos_error": "‖x − x_ref‖ [m]",
     "ori_error_x/y/z": "log3(R_ref Rᵀ), world axes [rad]",
     "fx, fy, fz, mx, my, mz": "wrench on the tool measured by the F/T sensor, at the TCP, world "
-    "axes [N, N·m] (the value the controller received, one step late; row 0: the arm held at "
-    "rest at its start posture, sim.simulate.start_held)",
+    "axes [N, N·m] (exact, one step late: the value the controller received with the ideal "
+    "sensor; row 0: the arm held at rest at its start posture, sim.simulate.start_held)",
+    "sensed_fx … sensed_mz": "with a sensor model or a believed tool: the F/T reading the "
+    "controller received (compliant_docking/sim/sensor.py)",
     "contacts": "number of MuJoCo contacts",
     "torque_saturated": "some joint command hit the torque clip",
     "<controller extras>": "per-step signals declared by the controller (e.g. adaptive "

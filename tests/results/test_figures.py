@@ -9,7 +9,13 @@ import pytest
 from matplotlib.collections import QuadMesh
 from matplotlib.container import BarContainer, ErrorbarContainer
 
-from compliant_docking.results.figures import force_overlay, metric_bars, success_map, success_vs_misalignment
+from compliant_docking.results.figures import (
+    force_overlay,
+    metric_bars,
+    success_map,
+    success_vs_error,
+    success_vs_misalignment,
+)
 from compliant_docking.run import rundir
 
 
@@ -102,6 +108,26 @@ def test_success_figures_show_every_controller_with_intervals(tmp_path):
                                                 for c in ("impedance", "hqp", "se3_lie")}  # fmt: skip
     labels = {t.get_text() for t in fig.legends[0].texts}
     assert "docked" in labels and "stuck short of the seat (jammed/wedged)" in labels
+
+
+def test_success_against_the_drawn_errors_bins_their_size_per_controller(tmp_path):
+    """success_vs_error: one panel per drawn error that varies (the link mass error measured
+    from 1, in %), one line per controller; the rate in each bin is the share of its jobs
+    that docked (here: docked exactly when the link mass error is under 1 %)."""
+    df = runs(tmp_path, repeats=8, trajectories=("quintic",), controllers=("impedance", "hqp"))
+    rng = np.random.default_rng(1)
+    df["model_error_link_mass_scale"] = rng.uniform(0.98, 1.02, len(df))
+    df["model_error_tool_mass_kg"] = 0.0  # not varied: no panel
+    df["success"] = (df["model_error_link_mass_scale"] - 1.0).abs() < 0.01
+    fig = success_vs_error(df)
+    assert [ax.get_xlabel() for ax in fig.axes[1:2]] == ["link mass error [%]"]
+    bars = [c for c in fig.axes[0].containers if isinstance(c, ErrorbarContainer)]
+    assert len(bars) == 2
+    for line in bars:
+        rate = np.asarray(line.lines[0].get_data()[1])
+        assert rate[0] == 100.0 and rate[-1] == 0.0  # the smallest errors docked, the largest did not
+    df = df.drop(columns=["model_error_link_mass_scale"])
+    assert success_vs_error(df) is None
 
 
 def test_success_map_needs_both_errors():
