@@ -3,9 +3,11 @@ by a path relative to the repository root (as the sweep prints it)."""
 
 from __future__ import annotations
 
+import contextlib
 import json
 import re
 import shutil
+import signal
 import sys
 import tempfile
 from pathlib import Path
@@ -58,6 +60,20 @@ def sweep_in_the_repository():
     shutil.rmtree(folder, ignore_errors=True)
 
 
+@contextlib.contextmanager
+def _stop_signal_handlers_kept():
+    """nbclient installs its own SIGINT and SIGTERM handlers while it runs the kernel
+    (asyncio's ``add_signal_handler``) and never puts back the ones it found (at best it
+    resets Python's defaults): put back the ones this process had, so that a later test in
+    this worker (the interruption tests) runs under its own."""
+    before = {signum: signal.getsignal(signum) for signum in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield
+    finally:
+        for signum, handler in before.items():
+            signal.signal(signum, handler)
+
+
 def test_notebook_runs_top_to_bottom_on_a_sweep(
     monkeypatch, this_interpreter_kernel, sweep_in_the_repository
 ):
@@ -86,7 +102,8 @@ def test_notebook_runs_top_to_bottom_on_a_sweep(
         timeout=180,
         resources={"metadata": {"path": str(NOTEBOOK.parent)}},
     )
-    client.execute()  # raises CellExecutionError on the first failing cell
+    with _stop_signal_handlers_kept():
+        client.execute()  # raises CellExecutionError on the first failing cell
 
     outputs = [o for cell in nb.cells if cell.cell_type == "code" for o in cell.get("outputs", [])]
     text = "\n".join(o.get("text", "") for o in outputs if o.get("output_type") == "stream")
