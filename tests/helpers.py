@@ -39,13 +39,24 @@ def run_cli(*args: str, cwd: Path | None = None, timeout: float = 300) -> subpro
 def cli_in_process(capsys, *args: str) -> tuple[int, str]:
     """``python -m compliant_docking args…`` in this process: (exit status, stderr). For
     commands refused before anything runs (no worker processes, no subprocess start-up)."""
+    code, _, err = cli_in_process_output(capsys, *args)
+    return code, err
+
+
+def cli_in_process_output(capsys, *args: str) -> tuple[int, str, str]:
+    """``python -m compliant_docking args…`` in this process: (exit status, stdout, stderr).
+    For a property of the command, not of its process: a refusal, a run's exit status, a
+    sweep on Hydra's basic launcher (``hydra/launcher=basic``: its jobs run here too). What
+    is about the process itself (the console script, signals, worker processes, a fresh
+    interpreter) keeps a subprocess (:func:`run_cli`)."""
     from compliant_docking.cli import main
 
     try:
         code = main(list(args))
     except SystemExit as exc:
         code = exc.code if isinstance(exc.code, int) else 1
-    return code, capsys.readouterr().err
+    captured = capsys.readouterr()
+    return code, captured.out, captured.err
 
 
 def push_at_tcp(sim, force=(0.0, 0.0, 0.0), moment=(0.0, 0.0, 0.0)) -> None:
