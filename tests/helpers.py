@@ -9,6 +9,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from compliant_docking.config import load_config
 
@@ -111,6 +112,27 @@ def sweep_cli(
         timeout=timeout,
         env=env,
     )
+
+
+#: how a sweep test runs its command: ``basic``, the command's main in this process on Hydra's
+#: basic launcher (its jobs run here too: no process start-up; the fast suite), ``pool``, a
+#: command-line process whose jobs run in the worker pool (end to end; `slow`, nightly)
+SWEEP_LAUNCHERS = ("basic", pytest.param("pool", marks=pytest.mark.slow))
+
+
+def sweep_with(
+    launcher: str, capsys, sweep_dir: Path, *args: str, env: dict[str, str] | None = None
+) -> subprocess.CompletedProcess:
+    """The sweep ``-m args…`` into ``sweep_dir`` as :data:`SWEEP_LAUNCHERS` says
+    (``env``: variables to set for it); its exit status and output."""
+    if launcher == "pool":
+        return sweep_cli(sweep_dir, *args, env=env)
+    command = ("-m", *args, "hydra/launcher=basic", f"hydra.sweep.dir={sweep_dir}")
+    with pytest.MonkeyPatch.context() as patch:
+        for name, value in (env or {}).items():
+            patch.setenv(name, value)
+        code, out, err = cli_in_process_output(capsys, *command)
+    return subprocess.CompletedProcess(["compliant-docking", *command], code, out, err)
 
 
 #: a short held-contact scene: the plug starts 10 mm above the seat, inside the bore, moves
