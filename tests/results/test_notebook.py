@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.helpers import REPO_ROOT, sweep_cli
+from tests.helpers import REPO_ROOT, SWEEP_LAUNCHERS, sweep_with
 from tests.helpers import SHORT_SWEEP as SHORT
 
 nbformat = pytest.importorskip("nbformat")
@@ -74,15 +74,22 @@ def _stop_signal_handlers_kept():
             signal.signal(signum, handler)
 
 
+@pytest.mark.parametrize("launcher", SWEEP_LAUNCHERS)
 def test_notebook_runs_top_to_bottom_on_a_sweep(
-    monkeypatch, this_interpreter_kernel, sweep_in_the_repository
+    monkeypatch, capsys, this_interpreter_kernel, sweep_in_the_repository, launcher
 ):
     sweep = sweep_in_the_repository / "sweep"
     # two controllers over the same three draws of the socket's pose (short runs)
     short = [o for o in SHORT if not o.startswith("controller=")]
     draws = ("task.misalignment.seed=range(3)", "task.misalignment.x_range=[-0.001,0.001]")
-    result = sweep_cli(
-        sweep, *short, "controller=impedance,hqp", *draws, "hydra.callbacks.sweep.figures=false"
+    result = sweep_with(
+        launcher,
+        capsys,
+        sweep,
+        *short,
+        "controller=impedance,hqp",
+        *draws,
+        "hydra.callbacks.sweep.figures=false",
     )
     assert result.returncode == 0, result.stdout[-2000:] + result.stderr[-2000:]  # none failed
     assert (sweep / "summary.md").is_file()
