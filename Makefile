@@ -22,13 +22,10 @@ $(STAMP): pyproject.toml
 run: $(STAMP) gl
 	$(PY) -m compliant_docking $(ARGS)
 
-# the fast suite on every core (pytest-xdist); `make test XDIST=0` runs it in one process.
-# --dist loadgroup: the tests sharing an expensive fixture run in one worker, which builds it
-# once (tests/conftest.py); every other test goes to whichever worker is free
+# the fast suite on every core (pytest-xdist); `make test XDIST=0` runs it in one process
 XDIST ?= auto
-DIST  := --dist loadgroup
 test: $(STAMP) gl
-	$(PY) -m pytest -q -n $(XDIST) $(DIST) $(PYTEST_ARGS)
+	$(PY) -m pytest -q -n $(XDIST) $(PYTEST_ARGS)
 
 # ruff (lint and format) and mypy, configured in pyproject.toml; CI runs this before the tests
 lint: $(STAMP)
@@ -37,7 +34,7 @@ lint: $(STAMP)
 	$(VENV)/bin/mypy
 
 test-slow: $(STAMP) gl
-	$(PY) -m pytest -q -n $(XDIST) $(DIST) -m slow $(PYTEST_ARGS)
+	$(PY) -m pytest -q -n $(XDIST) -m slow $(PYTEST_ARGS)
 
 # the built wheel in a fresh virtualenv, run from outside the checkout (tests/test_package.py)
 test-wheel: $(STAMP)
@@ -45,7 +42,7 @@ test-wheel: $(STAMP)
 
 # everything: the fast suite, the slow simulations and sweeps, the wheel
 test-all: $(STAMP) gl
-	$(PY) -m pytest -q -n $(XDIST) $(DIST) -m 'slow or wheel or not slow' $(PYTEST_ARGS)
+	$(PY) -m pytest -q -n $(XDIST) -m 'slow or wheel or not slow' $(PYTEST_ARGS)
 
 # Offscreen rendering (render=video) without a display needs EGL (or OSMesa) from the
 # system, not from pip: check that one loads; if not, install Debian's EGL packages

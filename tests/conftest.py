@@ -46,8 +46,8 @@ def pytest_configure(config) -> None:
 
 #: fixtures that build something expensive once per session (a CAD conversion, a sweep) or
 #: per module (a sweep, a run): every test using one joins one xdist group, so that under
-#: ``--dist loadgroup`` (``make test``) one worker builds it once, instead of each worker that
-#: happens to get one of its tests (pytest-xdist keeps a session fixture per worker)
+#: ``--dist loadgroup`` (pyproject's addopts, with ``-n``) one worker builds it once, instead
+#: of each worker that happens to get one of its tests (xdist keeps a session fixture per worker)
 SESSION_FIXTURES = ("converted", "failing_sweeps")
 MODULE_FIXTURES = ("killed", "finished_sweep", "finished_job", "two_runs", "real_run", "short_run")
 
