@@ -139,7 +139,8 @@ def test_user_options_from_outside_the_package_run_and_sweep(tmp_path, monkeypat
 
     sweep = subprocess.run(
         [sys.executable, "-m", "compliant_docking", "-m", f"hydra.searchpath=[file://{conf}]",
-         "controller=impedance,stiff_impedance", *short, f"hydra.sweep.dir={tmp_path / 'sweep'}"],
+         "controller=impedance,stiff_impedance", *short, "hydra.callbacks.sweep.figures=false",
+         f"hydra.sweep.dir={tmp_path / 'sweep'}"],
         cwd=tmp_path, capture_output=True, text=True, timeout=300, env=_env(),
     )  # fmt: skip
     assert sweep.returncode == 0, sweep.stdout[-2000:] + sweep.stderr[-2000:]
