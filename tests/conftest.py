@@ -44,6 +44,27 @@ def pytest_configure(config) -> None:
             sys.stderr.write(f"compiling a kernel before the workers failed:\n{err.decode()[-2000:]}\n")
 
 
+#: fixtures that build something expensive once per session (a CAD conversion, a sweep) or
+#: per module (a sweep, a run): every test using one joins one xdist group, so that under
+#: ``--dist loadgroup`` (pyproject's addopts, with ``-n``) one worker builds it once, instead
+#: of each worker that happens to get one of its tests (xdist keeps a session fixture per worker)
+SESSION_FIXTURES = ("converted", "failing_sweeps")
+MODULE_FIXTURES = ("killed", "finished_sweep", "finished_job", "two_runs", "real_run", "short_run")
+
+
+def pytest_collection_modifyitems(config, items) -> None:
+    """Each test that uses a shared fixture joins that fixture's xdist group (per module for
+    a module-scoped one)."""
+    for item in items:
+        used = getattr(item, "fixturenames", ())
+        group = next((name for name in SESSION_FIXTURES if name in used), None)
+        if group is None:
+            module = next((name for name in MODULE_FIXTURES if name in used), None)
+            group = None if module is None else f"{item.module.__name__}:{module}"
+        if group is not None:
+            item.add_marker(pytest.mark.xdist_group(group))
+
+
 _STOP_SIGNALS = ("SIGINT", "SIGTERM", "SIGHUP")
 
 

@@ -9,6 +9,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from compliant_docking.config import load_config
 
@@ -39,13 +40,24 @@ def run_cli(*args: str, cwd: Path | None = None, timeout: float = 300) -> subpro
 def cli_in_process(capsys, *args: str) -> tuple[int, str]:
     """``python -m compliant_docking args…`` in this process: (exit status, stderr). For
     commands refused before anything runs (no worker processes, no subprocess start-up)."""
+    code, _, err = cli_in_process_output(capsys, *args)
+    return code, err
+
+
+def cli_in_process_output(capsys, *args: str) -> tuple[int, str, str]:
+    """``python -m compliant_docking args…`` in this process: (exit status, stdout, stderr).
+    For a property of the command, not of its process: a refusal, a run's exit status, a
+    sweep on Hydra's basic launcher (``hydra/launcher=basic``: its jobs run here too). What
+    is about the process itself (the console script, signals, worker processes, a fresh
+    interpreter) keeps a subprocess (:func:`run_cli`)."""
     from compliant_docking.cli import main
 
     try:
         code = main(list(args))
     except SystemExit as exc:
         code = exc.code if isinstance(exc.code, int) else 1
-    return code, capsys.readouterr().err
+    captured = capsys.readouterr()
+    return code, captured.out, captured.err
 
 
 def push_at_tcp(sim, force=(0.0, 0.0, 0.0), moment=(0.0, 0.0, 0.0)) -> None:
@@ -100,6 +112,27 @@ def sweep_cli(
         timeout=timeout,
         env=env,
     )
+
+
+#: how a sweep test runs its command: ``basic``, the command's main in this process on Hydra's
+#: basic launcher (its jobs run here too: no process start-up; the fast suite), ``pool``, a
+#: command-line process whose jobs run in the worker pool (end to end; `slow`, nightly)
+SWEEP_LAUNCHERS = ("basic", pytest.param("pool", marks=pytest.mark.slow))
+
+
+def sweep_with(
+    launcher: str, capsys, sweep_dir: Path, *args: str, env: dict[str, str] | None = None
+) -> subprocess.CompletedProcess:
+    """The sweep ``-m args…`` into ``sweep_dir`` as :data:`SWEEP_LAUNCHERS` says
+    (``env``: variables to set for it); its exit status and output."""
+    if launcher == "pool":
+        return sweep_cli(sweep_dir, *args, env=env)
+    command = ("-m", *args, "hydra/launcher=basic", f"hydra.sweep.dir={sweep_dir}")
+    with pytest.MonkeyPatch.context() as patch:
+        for name, value in (env or {}).items():
+            patch.setenv(name, value)
+        code, out, err = cli_in_process_output(capsys, *command)
+    return subprocess.CompletedProcess(["compliant-docking", *command], code, out, err)
 
 
 #: a short held-contact scene: the plug starts 10 mm above the seat, inside the bore, moves

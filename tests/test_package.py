@@ -17,7 +17,7 @@ import pytest
 
 import compliant_docking
 from compliant_docking import ASSETS_DIR, CONF_DIR, resolve_path
-from tests.helpers import REPO_ROOT
+from tests.helpers import REPO_ROOT, cli_in_process_output
 
 #: the package's Python packages, as pyproject.toml lists them for the wheel
 DECLARED = tomllib.loads((REPO_ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["packages"]
@@ -120,17 +120,18 @@ def test_the_documented_user_config_example_is_the_one_tested():
         assert textwrap.dedent(text).strip() in doc, f"docs/extending.md no longer shows {name} as tested"
 
 
-def test_user_options_from_outside_the_package_run_and_sweep(tmp_path):
+def test_user_options_from_outside_the_package_run_and_sweep(tmp_path, monkeypatch, capsys):
     """The README's way to add a controller and an interface without editing the package:
-    --config-dir for a run and a sweep (whose jobs compose in worker processes)."""
+    --config-dir for a run (the command's main, in this process, from another directory) and
+    a search path for a sweep (a command-line process whose jobs compose in worker processes)."""
     conf = _write_user_conf(tmp_path)
     short = ("task.duration=0.5", "task.progress=false")
-    run = subprocess.run(
-        [sys.executable, "-m", "compliant_docking", "--config-dir", str(conf), "controller=stiff_impedance",
-         "tool=wide_plug", "target=wide_socket", *short, f"hydra.run.dir={tmp_path / 'run'}"],
-        cwd=tmp_path, capture_output=True, text=True, timeout=300, env=_env(),
+    monkeypatch.chdir(tmp_path)
+    code, out, err = cli_in_process_output(
+        capsys, "--config-dir", str(conf), "controller=stiff_impedance", "tool=wide_plug",
+        "target=wide_socket", *short, f"hydra.run.dir={tmp_path / 'run'}",
     )  # fmt: skip
-    assert run.returncode in (0, 3), run.stdout[-2000:] + run.stderr[-2000:]  # 3: a 0.5 s run is not seated
+    assert code in (0, 3), out[-2000:] + err[-2000:]  # 3: a 0.5 s run is not seated
     config = (tmp_path / "run" / ".hydra" / "config.yaml").read_text()
     assert "name: stiff_impedance" in config and "k: 150.0" in config and "radius: 0.012" in config
     metrics = json.loads((tmp_path / "run" / "metrics.json").read_text())
@@ -138,7 +139,8 @@ def test_user_options_from_outside_the_package_run_and_sweep(tmp_path):
 
     sweep = subprocess.run(
         [sys.executable, "-m", "compliant_docking", "-m", f"hydra.searchpath=[file://{conf}]",
-         "controller=impedance,stiff_impedance", *short, f"hydra.sweep.dir={tmp_path / 'sweep'}"],
+         "controller=impedance,stiff_impedance", *short, "hydra.callbacks.sweep.figures=false",
+         f"hydra.sweep.dir={tmp_path / 'sweep'}"],
         cwd=tmp_path, capture_output=True, text=True, timeout=300, env=_env(),
     )  # fmt: skip
     assert sweep.returncode == 0, sweep.stdout[-2000:] + sweep.stderr[-2000:]

@@ -100,7 +100,10 @@ def test_singular_task_inertia_takes_the_fallback_as_in_numpy():
         ref, wrench = _case(arm, rng, 0.3)
         if k == 2:  # step 2, no check due: the TCP's axes the world's, J's last row zero, so
             # J_b's last row and Λ⁻¹'s last row and column are exactly zero (a zero pivot)
-            arm.rot = arm.rot_T = np.eye(3)
+            # the rotation column-major, as pinocchio gives it: the compiled step's own signature
+            # (a C-ordered one would compile a second signature, for this test alone)
+            arm.rot = np.eye(3, order="F")
+            arm.rot_T = arm.rot.T
             arm.J = arm.J.copy()
             arm.J[5] = 0.0
         assert close(fast.compute(0.0, arm, ref, wrench), slow.compute(0.0, arm, ref, wrench), REL)

@@ -23,7 +23,7 @@ from compliant_docking.evaluation.tracking_gate import (
 from compliant_docking.run.rundir import write_metrics
 from compliant_docking.run.runner import execute
 from compliant_docking.run.summary import format_summary
-from tests.helpers import make_cfg, run_cli
+from tests.helpers import cli_in_process_output, make_cfg
 
 #: the thresholds of conf/task (the seed's TrackingThresholds values)
 THRESHOLDS = OmegaConf.to_object(make_cfg().task.tracking_gate)
@@ -236,18 +236,20 @@ def test_the_preset_passes_on_both_robots(robot, controller, tmp_path):
     assert saved["tracking_gate"] == "PASS" and saved["gate_failures"] is None
 
 
-def test_a_gate_failure_exits_3_through_the_command_line(tmp_path):
-    """The PASS side runs in-process above (every robot and controller); here the command
-    line turns a FAIL into exit status 3 and prints the failing item."""
-    bad = run_cli(
+def test_a_gate_failure_exits_3_through_the_command_line(tmp_path, capsys):
+    """The PASS side runs through the runner above (every robot and controller); here the
+    command line (its main, in this process) turns a FAIL into exit status 3 and prints the
+    failing item. Exit statuses through a real process: tests/run/test_cli.py."""
+    code, out, err = cli_in_process_output(
+        capsys,
         "+experiment=tracking_gate",
         "task.progress=false",
         "task.tracking_gate.circle_position_rms_m=1e-7",
         "figures=false",
         f"hydra.run.dir={tmp_path / 'run'}",
     )
-    assert bad.returncode == 3, bad.stdout + bad.stderr
-    assert "tracking gate FAIL" in bad.stdout and "circle position RMS" in bad.stdout
+    assert code == 3, out + err
+    assert "tracking gate FAIL" in out and "circle position RMS" in out
 
 
 def test_a_short_run_is_incomplete(tmp_path):

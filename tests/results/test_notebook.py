@@ -3,16 +3,18 @@ by a path relative to the repository root (as the sweep prints it)."""
 
 from __future__ import annotations
 
+import contextlib
 import json
 import re
 import shutil
+import signal
 import sys
 import tempfile
 from pathlib import Path
 
 import pytest
 
-from tests.helpers import REPO_ROOT, sweep_cli
+from tests.helpers import REPO_ROOT, SWEEP_LAUNCHERS, sweep_with
 from tests.helpers import SHORT_SWEEP as SHORT
 
 nbformat = pytest.importorskip("nbformat")
@@ -58,15 +60,36 @@ def sweep_in_the_repository():
     shutil.rmtree(folder, ignore_errors=True)
 
 
+@contextlib.contextmanager
+def _stop_signal_handlers_kept():
+    """nbclient installs its own SIGINT and SIGTERM handlers while it runs the kernel
+    (asyncio's ``add_signal_handler``) and never puts back the ones it found (at best it
+    resets Python's defaults): put back the ones this process had, so that a later test in
+    this worker (the interruption tests) runs under its own."""
+    before = {signum: signal.getsignal(signum) for signum in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield
+    finally:
+        for signum, handler in before.items():
+            signal.signal(signum, handler)
+
+
+@pytest.mark.parametrize("launcher", SWEEP_LAUNCHERS)
 def test_notebook_runs_top_to_bottom_on_a_sweep(
-    monkeypatch, this_interpreter_kernel, sweep_in_the_repository
+    monkeypatch, capsys, this_interpreter_kernel, sweep_in_the_repository, launcher
 ):
     sweep = sweep_in_the_repository / "sweep"
     # two controllers over the same three draws of the socket's pose (short runs)
     short = [o for o in SHORT if not o.startswith("controller=")]
     draws = ("task.misalignment.seed=range(3)", "task.misalignment.x_range=[-0.001,0.001]")
-    result = sweep_cli(
-        sweep, *short, "controller=impedance,hqp", *draws, "hydra.callbacks.sweep.figures=false"
+    result = sweep_with(
+        launcher,
+        capsys,
+        sweep,
+        *short,
+        "controller=impedance,hqp",
+        *draws,
+        "hydra.callbacks.sweep.figures=false",
     )
     assert result.returncode == 0, result.stdout[-2000:] + result.stderr[-2000:]  # none failed
     assert (sweep / "summary.md").is_file()
@@ -86,7 +109,8 @@ def test_notebook_runs_top_to_bottom_on_a_sweep(
         timeout=180,
         resources={"metadata": {"path": str(NOTEBOOK.parent)}},
     )
-    client.execute()  # raises CellExecutionError on the first failing cell
+    with _stop_signal_handlers_kept():
+        client.execute()  # raises CellExecutionError on the first failing cell
 
     outputs = [o for cell in nb.cells if cell.cell_type == "code" for o in cell.get("outputs", [])]
     text = "\n".join(o.get("text", "") for o in outputs if o.get("output_type") == "stream")

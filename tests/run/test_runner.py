@@ -6,7 +6,7 @@ import pytest
 
 from compliant_docking.evaluation.registry import CONTACT_KEYS, DOCKING_KEYS
 from compliant_docking.run.runner import execute
-from tests.helpers import make_cfg, run_cli
+from tests.helpers import cli_in_process, make_cfg
 
 REQUIRED = {
     "status",
@@ -79,10 +79,10 @@ def test_diverging_run_fails_cleanly(tmp_path):
         ("physics.integrator=foo", "expected one of [euler, rk4, implicit, implicitfast]"),
     ],
 )
-def test_bad_config_fails_at_composition(tmp_path, override, message):
-    result = run_cli(override, f"hydra.run.dir={tmp_path / 'run'}")
-    assert result.returncode == 1
-    assert message in result.stderr
+def test_bad_config_fails_at_composition(tmp_path, capsys, override, message):
+    code, err = cli_in_process(capsys, override, f"hydra.run.dir={tmp_path / 'run'}")
+    assert code == 1
+    assert message in err
     assert not (tmp_path / "run").exists()  # nothing written
 
 

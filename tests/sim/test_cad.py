@@ -182,10 +182,12 @@ def _piece(model: mujoco.MjModel, geom: int) -> np.ndarray:
     return vertices @ rotation.reshape(3, 3).T + model.geom_pos[geom]
 
 
+@pytest.mark.slow
 def test_a_coarse_decomposition_is_made_exact(converted, tmp_path):
     """CoACD capped at 2 pieces per part fills the bore (the converter used to refuse
     it): split by the socket's own faces and merged, its pieces keep every gap and pass
-    the contact audit."""
+    the contact audit. The rule in the fast suite, on an L block whose hull fills its notch:
+    tests/sim/test_conform.py (split exactly, pressed like the solid at the cuts)."""
     plug_stl, socket_stl, *_ = converted
     options = cad.ConvertOptions(symmetry=4, coacd=QUICK, max_pieces=2, min_threshold=QUICK.threshold)
     m = cad.convert(plug_stl, socket_stl, tmp_path, options, log=lambda _: None).manifest
@@ -198,10 +200,12 @@ def _as_coacd_made_them(hulls, mesh, settings):
     return hulls, cad.ConformReport(len(hulls), len(hulls), len(hulls), 0, 0, 0.0, 0, 0, 0.0, 0.0)
 
 
+@pytest.mark.slow
 def test_raw_coacd_pieces_are_refused_by_the_contact_audit(converted, tmp_path, monkeypatch):
     """Without the rebuilding, CoACD's own pieces (which keep half of every gap, so the
     clearance check passes) fail the contact audit: refused, naming where, and nothing
-    written."""
+    written. In the fast suite the same refusal comes through the command line from the
+    cached pieces (test_command_line_exports_converts_from_the_cache_and_exits_by_outcome)."""
     plug_stl, socket_stl, *_ = converted
 
     monkeypatch.setattr(cad, "conform", _as_coacd_made_them)

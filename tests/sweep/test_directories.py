@@ -8,13 +8,13 @@ from __future__ import annotations
 import json
 import os
 import subprocess
-import sys
 from pathlib import Path
+from types import SimpleNamespace
 
 import pytest
 from omegaconf import OmegaConf
 
-from tests.helpers import REPO_ROOT, cli_in_process
+from tests.helpers import cli_in_process, cli_in_process_output
 
 #: a two-job sweep in free space, 0.2 s simulated per job, jobs run in the launching process
 TINY = (
@@ -158,24 +158,21 @@ def test_the_claim_rule(tmp_path):
 
 
 # --------------------------------------------------------------------------- resume
-def _sweep(sweep_dir: Path, *extra: str) -> subprocess.CompletedProcess:
-    return subprocess.run(
-        [sys.executable, "-m", "compliant_docking", "-m", *TINY, *extra],
-        cwd=REPO_ROOT,
-        capture_output=True,
-        text=True,
-        timeout=300,
-        env={**os.environ, "PYTHONUNBUFFERED": "1"},
-    )
+def _sweep(capsys, *extra: str) -> SimpleNamespace:
+    """The TINY sweep with ``extra`` through the command line's main, in this process (its
+    jobs too: Hydra's basic launcher): returncode, stdout, stderr."""
+    code, out, err = cli_in_process_output(capsys, "-m", *TINY, *extra)
+    return SimpleNamespace(returncode=code, stdout=out, stderr=err)
 
 
 @pytest.fixture(scope="module")
 def finished_sweep(tmp_path_factory):
     """A two-job sweep whose second job is left unfinished (its metrics.json removed), so that
     a resume would rerun it: the job a moved directory would aim elsewhere."""
+    from compliant_docking.cli import main
+
     sweep_dir = tmp_path_factory.mktemp("resume") / "sweep"
-    result = _sweep(sweep_dir, f"hydra.sweep.dir={sweep_dir}")
-    assert result.returncode == 0, result.stderr[-3000:]
+    assert main(["-m", *TINY, f"hydra.sweep.dir={sweep_dir}"]) == 0
     jobs = sorted(p for p in sweep_dir.iterdir() if p.is_dir() and p.name[0].isdigit())
     (jobs[1] / "metrics.json").unlink(missing_ok=True)
     return sweep_dir
@@ -191,7 +188,7 @@ def finished_sweep(tmp_path_factory):
     ],
 )
 def test_a_resume_that_would_move_its_jobs_is_refused_and_touches_nothing(
-    finished_sweep, tmp_path, moves, message
+    finished_sweep, tmp_path, capsys, moves, message
 ):
     """Before: rerunning a job emptied the directory its composed path pointed to, even
     outside the sweep (another directory, the sweep's parent)."""
@@ -199,7 +196,7 @@ def test_a_resume_that_would_move_its_jobs_is_refused_and_touches_nothing(
     victim.mkdir()
     (victim / "data.txt").write_text("keep me")
     sweep_before, parent_before = _tree(finished_sweep), _tree(finished_sweep.parent)
-    result = _sweep(finished_sweep, f"resume={finished_sweep}", *(m.format(victim=victim) for m in moves))
+    result = _sweep(capsys, f"resume={finished_sweep}", *(m.format(victim=victim) for m in moves))
     assert result.returncode == 1, result.stdout[-2000:] + result.stderr[-2000:]
     assert result.stderr.startswith("resume: ") and message in result.stderr
     assert "Traceback" not in result.stderr
@@ -207,7 +204,7 @@ def test_a_resume_that_would_move_its_jobs_is_refused_and_touches_nothing(
     assert _tree(finished_sweep) == sweep_before and _tree(finished_sweep.parent) == parent_before
 
 
-def test_a_resume_that_finds_job_directories_it_would_not_write_is_refused(finished_sweep, tmp_path):
+def test_a_resume_that_finds_job_directories_it_would_not_write_is_refused(finished_sweep, tmp_path, capsys):
     """Jobs named otherwise than when the sweep ran (here: a job directory of another
     naming, as an edited default would leave): the summary would mix both."""
     copy = tmp_path / "sweep"
@@ -215,7 +212,7 @@ def test_a_resume_that_finds_job_directories_it_would_not_write_is_refused(finis
     stray = copy / "7_controller.k=70"
     (stray / ".hydra").mkdir(parents=True)
     before = _tree(copy)
-    result = _sweep(copy, f"resume={copy}")
+    result = _sweep(capsys, f"resume={copy}")
     assert result.returncode == 1
     assert (
         "the sweep holds job directories that none of this command's jobs would write (7_controller.k=70)"
@@ -224,10 +221,10 @@ def test_a_resume_that_finds_job_directories_it_would_not_write_is_refused(finis
     assert _tree(copy) == before
 
 
-def test_the_resume_of_an_untouched_sweep_still_finishes_it(finished_sweep, tmp_path):
+def test_the_resume_of_an_untouched_sweep_still_finishes_it(finished_sweep, tmp_path, capsys):
     copy = tmp_path / "sweep"
     subprocess.run(["cp", "-a", str(finished_sweep), str(copy)], check=True)
-    result = _sweep(copy, f"resume={copy}")
+    result = _sweep(capsys, f"resume={copy}")
     assert result.returncode == 0, result.stderr[-3000:]
     assert "skipped: finished earlier with the same config" in result.stdout
     records = [json.loads(p.read_text()) for p in copy.glob("*/metrics.json")]
@@ -277,19 +274,19 @@ def test_the_sweep_job_directory_template_shortens_long_names():
 
 
 @pytest.mark.slow
-def test_a_sweep_with_long_job_names_runs_and_resumes(tmp_path):
+def test_a_sweep_with_long_job_names_runs_and_resumes(tmp_path, capsys):
     """Before: the sweep aborted with a traceback (File name too long), and the suggested
     resume= failed the same way."""
     torque = "robot.torque_limits=[" + ",".join(["320.000000000000001"] * 7) + "]"
     velocity = "robot.velocity_limits=[" + ",".join(["1.48350000000000001"] * 7) + "]"
     sweep = tmp_path / "sweep"
-    first = _sweep(sweep, torque, velocity, f"hydra.sweep.dir={sweep}")
+    first = _sweep(capsys, torque, velocity, f"hydra.sweep.dir={sweep}")
     assert first.returncode == 0, first.stderr[-3000:]
     jobs = sorted(p for p in sweep.iterdir() if p.is_dir())
     assert len(jobs) == 2 and all(
         len(p.name.encode()) <= 255 and (p / "metrics.json").is_file() for p in jobs
     )
-    again = _sweep(sweep, torque, velocity, f"resume={sweep}")
+    again = _sweep(capsys, torque, velocity, f"resume={sweep}")
     assert again.returncode == 0, again.stderr[-3000:]
     assert again.stdout.count("skipped: finished earlier with the same config") == 2
 

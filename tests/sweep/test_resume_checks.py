@@ -13,7 +13,7 @@ import pytest
 
 from compliant_docking.run.runner import execute
 from compliant_docking.sweep import progress, resume
-from tests.helpers import make_cfg, sweep_cli
+from tests.helpers import SWEEP_LAUNCHERS, make_cfg, sweep_with
 
 SHORT = ("trajectory.duration=1", "task.settle_time=1", "task.progress=false")
 
@@ -67,11 +67,12 @@ def test_assess_keeps_a_sound_job_and_says_why_it_reruns_another(finished_job, t
     assert resume.assess(cfg, tmp_path / "never")[1] == "it never started"
 
 
-def test_resume_reruns_a_job_whose_artefact_is_corrupt_and_says_why(tmp_path):
+@pytest.mark.parametrize("launcher", SWEEP_LAUNCHERS)
+def test_resume_reruns_a_job_whose_artefact_is_corrupt_and_says_why(tmp_path, capsys, launcher):
     sweep = tmp_path / "sweep"
     args = ("trajectory=hold", "target=none", "task.init_pos=[0.55,0,0.35]", *SHORT)
     args = (*args, "trajectory.duration=1,1.5,2", "hydra.callbacks.sweep.figures=false")
-    first = sweep_cli(sweep, *args)
+    first = sweep_with(launcher, capsys, sweep, *args)
     assert first.returncode == 0, first.stderr[-3000:]
     jobs = sorted(p for p in sweep.iterdir() if p.is_dir())
     corrupt, edited, kept = jobs
@@ -80,7 +81,7 @@ def test_resume_reruns_a_job_whose_artefact_is_corrupt_and_says_why(tmp_path):
     (edited / "metrics.json").write_text(json.dumps({**record, "config_hash": "0" * 16}))  # conf/ edited
     kept_bytes = (kept / "metrics.json").read_bytes()
 
-    result = sweep_cli(sweep, *args, f"resume={sweep}")
+    result = sweep_with(launcher, capsys, sweep, *args, f"resume={sweep}")
     assert result.returncode == 0, result.stderr[-3000:]
     lines = [line for line in result.stdout.splitlines() if re.match(r"\[\d/3\] ", line)]
     assert sorted(line[:5] for line in lines) == ["[1/3]", "[2/3]", "[3/3]"]  # this run's count

@@ -13,7 +13,7 @@ from omegaconf import OmegaConf
 
 from compliant_docking.tracking.mlflow_callback import MlflowCallback, flatten, param_text
 from tests.helpers import SHORT_SWEEP as SHORT
-from tests.helpers import sweep_cli
+from tests.helpers import SWEEP_LAUNCHERS, sweep_with
 
 
 @pytest.fixture
@@ -32,9 +32,12 @@ def runs_of(uri: str, experiment: str = "compliant-docking"):
     return client, client.search_runs([found.experiment_id])
 
 
-def test_a_sweep_is_a_parent_run_with_one_child_run_per_job(tmp_path, store):
+@pytest.mark.parametrize("launcher", SWEEP_LAUNCHERS)
+def test_a_sweep_is_a_parent_run_with_one_child_run_per_job(tmp_path, store, capsys, launcher):
     sweep = tmp_path / "sweep"
-    result = sweep_cli(
+    result = sweep_with(
+        launcher,
+        capsys,
         sweep,
         *SHORT,
         "robot=iiwa14,fr3",

@@ -12,7 +12,7 @@ import pytest
 from compliant_docking.run.runner import execute
 from compliant_docking.sim.simulate import prepare
 from compliant_docking.viz import viewer
-from tests.helpers import make_cfg, run_cli
+from tests.helpers import cli_in_process_output, make_cfg
 
 
 # --------------------------------------------------------------------------- refusals
@@ -39,12 +39,13 @@ def test_single_run_without_display_is_refused_before_simulating(tmp_path, monke
     assert json.loads((tmp_path / "metrics.json").read_text())["error"] == record["error"]
 
 
-def test_sweep_with_viewer_is_refused_before_anything_runs(tmp_path):
+def test_sweep_with_viewer_is_refused_before_anything_runs(tmp_path, capsys):
     """viewer=true in a sweep is refused up front (compliant_docking/sweep/guard.py), not by
     every job; the runner's own refusal (a job that sees Hydra's MULTIRUN mode) stays for
     runs started otherwise."""
     sweep = tmp_path / "sweep"
-    result = run_cli(
+    code, out, err = cli_in_process_output(
+        capsys,
         "-m",
         "viewer=true",
         "task.duration=0.2",
@@ -53,9 +54,9 @@ def test_sweep_with_viewer_is_refused_before_anything_runs(tmp_path):
         f"hydra.sweep.dir={sweep}",
         "hydra.callbacks.sweep.figures=false",
     )
-    assert result.returncode == 1
-    assert "viewer=true is refused in a sweep (-m)" in result.stderr
-    assert "resume" not in result.stdout + result.stderr and "Traceback" not in result.stderr
+    assert code == 1
+    assert "viewer=true is refused in a sweep (-m)" in err
+    assert "resume" not in out + err and "Traceback" not in err
     assert not sweep.exists()
 
 
