@@ -59,6 +59,9 @@ class LeadLimit:
             if ahead > self.limit and self.axial[j] > self.axial[j - 1]:
                 j -= 1
                 self.compliant = True
+        self.index, previous = j, self.index
+        if j == k and not self.compliant:  # on time: row k of the live table is the planned one
+            return self.live.row(k, ref)
         planned, live = self.planned, self.live
         if self.compliant:  # the planned axial position, the plug's lateral one
             p0, p1, p2 = planned.pos[j].tolist()
@@ -69,7 +72,7 @@ class LeadLimit:
         else:
             live.pos[k] = planned.pos[j]
         live.rot[k] = planned.rot[j]
-        if j == self.index:  # held: the reference at rest
+        if j == previous:  # held: the reference at rest
             live.twist[k] = 0.0
             live.accel[k] = 0.0
             self.held_steps += 1
@@ -78,7 +81,6 @@ class LeadLimit:
         else:
             live.twist[k] = planned.twist[j]
             live.accel[k] = planned.accel[j]
-        self.index = j
         return live.row(k, ref)
 
     def diagnostics(self, dt: float) -> dict:
