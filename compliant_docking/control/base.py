@@ -22,7 +22,7 @@ from scipy.linalg import lapack
 
 from compliant_docking.config import FrictionComp
 from compliant_docking.control.integral import PositionIntegral
-from compliant_docking.control.kernel_blocks import YIELD_SPEED
+from compliant_docking.control.kernel_blocks import FRICTION_CODES, YIELD_SPEED, friction_feed_forward
 from compliant_docking.planning.base import Reference
 from compliant_docking.sim.context import ControlContext
 from compliant_docking.sim.models import ArmModel
@@ -57,6 +57,7 @@ class FrictionFeedForward:
         self.active = bool(np.any(self.f > 0.0) or np.any(self.b > 0.0))
         self._yielding = self.mode is FrictionComp.yielding
         self._unbiased = self._yielding or self.mode is FrictionComp.torque_unbiased
+        self._code = FRICTION_CODES[self.mode]
         self._torque_mode = self.mode is not FrictionComp.velocity
         # the argument of tanh per unit of its input: 2/f (torque modes) or 1/0.01 (velocity)
         self._scale = (
@@ -71,16 +72,18 @@ class FrictionFeedForward:
         ``bias``: the arm's h = C v + g of this step; needed by ``torque_unbiased`` and
         ``yielding`` only.
         """
+        if self._unbiased and bias is None:
+            raise ValueError(f"friction_comp={self.mode.value} needs the bias torques h of the step")
+        if self._yielding:  # compiled: a dozen numpy calls on 7 numbers would triple the cost
+            out = np.empty_like(self.f)
+            friction_feed_forward(tau_pre, v, bias, self.f, self.b, self._scale, self._code, out)
+            return out
         if self._unbiased:
-            if bias is None:
-                raise ValueError(f"friction_comp={self.mode.value} needs the bias torques h of the step")
             x = tau_pre - bias
             x *= self._scale
         else:
             x = (tau_pre if self._torque_mode else v) * self._scale
         np.tanh(x, out=x)
-        if self._yielding:  # × (1 − min(|v|/0.02, 1)) where the joint moves against it
-            x *= np.where(v * x < 0.0, 1.0 - np.minimum(np.abs(v) / self.YIELD_SPEED, 1.0), 1.0)
         x *= self.f
         x += self.b * v
         return x

@@ -3,8 +3,9 @@
 and the friction feed-forward.
 
 Each is the compiled twin of a numpy/LAPACK piece that the numpy laws (impedance) keep
-using; tests/control/test_kernel_blocks.py checks every twin against its original on random
-inputs.
+using (the numpy laws call the feed-forward's compiled block for the yielding mode, whose
+formula tests/control/test_base.py checks in closed form); tests/control/test_kernel_blocks.py
+checks every twin against its original on random inputs.
 """
 
 from __future__ import annotations
