@@ -34,6 +34,10 @@ class FrictionComp(Enum):
     # torques h = C v + g, so a gravity-holding torque does not set the sign
     # (docs/controllers/friction.md)
     torque_unbiased = "torque_unbiased"
+    # torque_unbiased, switched off on a joint that moves against it (fully from |v| =
+    # 0.02 rad/s, linearly below): never pushes against a motion the contact drives
+    # (docs/controllers/friction.md)
+    yielding = "yielding"
 
 
 class ForceSource(Enum):

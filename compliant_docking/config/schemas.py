@@ -150,6 +150,7 @@ class ControllerConfig:
     integral_limit: float = positive(unit="N")  # clamp of the integral force's norm
     integral_lateral_only: bool = MISSING  # only the error perpendicular to the docking axis
     integral_freeze_force: float = at_least(0.0, unit="N")  # frozen while the measured ‖f‖ exceeds this
+    integral_latch: bool = MISSING  # true: frozen from the first such step to the end of the run
 
 
 @dataclass
@@ -234,6 +235,8 @@ class QuinticConfig(TrajectoryConfig):
     """Rest-to-rest quintic along the stroke, orientation held (docs/control_laws.md §4)."""
 
     duration: float = positive(unit="s")  # the seed's DockingConfig.traj_duration [s]
+    # the reference leads the plug by at most this along the insertion axis (null: open loop)
+    lead_limit: Optional[float] = positive(unit="m")
 
 
 @dataclass
@@ -256,6 +259,8 @@ class TwoPhaseConfig(TrajectoryConfig):
     a_max_approach: float = positive(unit="m/s²")  # [m/s²]
     v_max_docking: float = positive(unit="m/s")  # [m/s]
     a_max_docking: float = positive(unit="m/s²")  # [m/s²]
+    # the reference leads the plug by at most this along the insertion axis (null: open loop)
+    lead_limit: Optional[float] = positive(unit="m")
 
 
 @dataclass

@@ -22,6 +22,7 @@ from scipy.linalg import lapack
 
 from compliant_docking.config import FrictionComp
 from compliant_docking.control.integral import PositionIntegral
+from compliant_docking.control.kernel_blocks import FRICTION_CODES, YIELD_SPEED, friction_feed_forward
 from compliant_docking.planning.base import Reference
 from compliant_docking.sim.context import ControlContext
 from compliant_docking.sim.models import ArmModel
@@ -40,16 +41,23 @@ class FrictionFeedForward:
     the command that is meant to move the arm. Under gravity the plain torque mode takes
     its sign from the gravity-holding torque, i.e. it pushes every loaded joint by ±f
     whatever the motion; in zero gravity the two differ only by C v.
+    ``yielding`` mode: torque_unbiased, y = tanh(2(τ_pre − h)/f), scaled by
+    1 − min(|v|/0.02 rad/s, 1) on a joint moving against it (v·y < 0): f·y' + b·v. A motion
+    the contact drives against the command (the plug pushed sideways by the funnel) then
+    meets the joint's own friction, not twice it; the feed-forward never opposes a motion.
     """
 
     VELOCITY_SCALE = 0.01  # [rad/s]
+    YIELD_SPEED = YIELD_SPEED  # [rad/s]
 
     def __init__(self, friction: np.ndarray, damping: np.ndarray, mode: FrictionComp):
         self.mode = FrictionComp(mode)
         self.f = np.asarray(friction, dtype=float).copy()
         self.b = np.asarray(damping, dtype=float).copy()
         self.active = bool(np.any(self.f > 0.0) or np.any(self.b > 0.0))
-        self._unbiased = self.mode is FrictionComp.torque_unbiased
+        self._yielding = self.mode is FrictionComp.yielding
+        self._unbiased = self._yielding or self.mode is FrictionComp.torque_unbiased
+        self._code = FRICTION_CODES[self.mode]
         self._torque_mode = self.mode is not FrictionComp.velocity
         # the argument of tanh per unit of its input: 2/f (torque modes) or 1/0.01 (velocity)
         self._scale = (
@@ -61,11 +69,16 @@ class FrictionFeedForward:
     def __call__(self, tau_pre: np.ndarray, v: np.ndarray, bias: np.ndarray | None = None) -> np.ndarray:
         """The feed-forward torque (callers may skip the call when ``active`` is False).
 
-        ``bias``: the arm's h = C v + g of this step; needed by ``torque_unbiased`` only.
+        ``bias``: the arm's h = C v + g of this step; needed by ``torque_unbiased`` and
+        ``yielding`` only.
         """
+        if self._unbiased and bias is None:
+            raise ValueError(f"friction_comp={self.mode.value} needs the bias torques h of the step")
+        if self._yielding:  # compiled: a dozen numpy calls on 7 numbers would triple the cost
+            out = np.empty_like(self.f)
+            friction_feed_forward(tau_pre, v, bias, self.f, self.b, self._scale, self._code, out)
+            return out
         if self._unbiased:
-            if bias is None:
-                raise ValueError("friction_comp=torque_unbiased needs the bias torques h of the step")
             x = tau_pre - bias
             x *= self._scale
         else:
@@ -160,6 +173,7 @@ class Controller(ABC):
         integral_limit: float,
         integral_lateral_only: bool,
         integral_freeze_force: float,
+        integral_latch: bool,
     ):
         self.ctx = context
         self.arm = context.arm
@@ -175,6 +189,7 @@ class Controller(ABC):
                 context.dt,
                 lateral_only=integral_lateral_only,
                 freeze_force=integral_freeze_force,
+                latch=integral_latch,
             )
             if integral_gain
             else None

@@ -11,12 +11,15 @@ import numpy as np
 class PositionIntegral:
     """Integral action on the TCP position error, as a force the law adds to K e.
 
-    Each step, while the measured contact force ‖f‖ is at most ``freeze_force``:
+    Each step, while the measured contact force ‖f‖ is at most ``freeze_force`` (with
+    ``latch``: until the first step it exceeds it; frozen from then on):
     I ← I + dt·P(x_d − x), P = I − u uᵀ (``lateral_only``: perpendicular to the docking
     axis u) or the identity; the force is F_i = gain·I, its norm clamped at ``limit``
     (the state is scaled back, so it never winds up past the clamp). In contact the
     integral is frozen: it keeps the joint-friction offset it learned in free space, and
     a socket that is not where the planner believed cannot wind it up against the bore.
+    Latched, a contact lost again (the plug released from a stuck chamfer, falling onto
+    the seat below the freeze force) cannot wind it up either.
 
     Why: joint friction the model lacks (the FR3's 1.14 N·m) holds the arm wherever the
     stiffness force at the TCP is below the friction's reflection there, so a compliant
@@ -36,6 +39,7 @@ class PositionIntegral:
         *,
         lateral_only: bool,
         freeze_force: float,
+        latch: bool,
     ):
         if not gain > 0.0 or not limit > 0.0 or not freeze_force >= 0.0:
             raise ValueError(
@@ -47,6 +51,8 @@ class PositionIntegral:
         u = np.asarray(axis, dtype=float) / np.linalg.norm(axis)
         self.axis = tuple(u.tolist()) if lateral_only else None  # error component removed
         self.freeze_sq = float(freeze_force) ** 2
+        self.latch = bool(latch)  # frozen for good from the first step over freeze_force
+        self.latched = False
         # 3-vectors as Python floats: a few float operations cost less than numpy calls
         self.state = (0.0, 0.0, 0.0)  # ∫P e dt [m·s]
         self.force = (0.0, 0.0, 0.0)  # F_i [N]
@@ -56,8 +62,9 @@ class PositionIntegral:
     def update(self, error: np.ndarray, wrench: np.ndarray) -> tuple[float, float, float]:
         """F_i [N, world] after this step's error x_d − x [m] and measured wrench [f; m]."""
         f0, f1, f2, _, _, _ = wrench.tolist()
-        if f0 * f0 + f1 * f1 + f2 * f2 > self.freeze_sq:
+        if self.latched or f0 * f0 + f1 * f1 + f2 * f2 > self.freeze_sq:
             self.frozen_steps += 1
+            self.latched = self.latch
             return self.force
         e0, e1, e2 = error.tolist()
         if self.axis is not None:  # drop the component along the docking axis

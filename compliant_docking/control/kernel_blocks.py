@@ -3,8 +3,9 @@
 and the friction feed-forward.
 
 Each is the compiled twin of a numpy/LAPACK piece that the numpy laws (impedance) keep
-using; tests/control/test_kernel_blocks.py checks every twin against its original on random
-inputs.
+using (the numpy laws call the feed-forward's compiled block for the yielding mode, whose
+formula tests/control/test_base.py checks in closed form); tests/control/test_kernel_blocks.py
+checks every twin against its original on random inputs.
 """
 
 from __future__ import annotations
@@ -15,7 +16,14 @@ from compliant_docking.config import FrictionComp
 from compliant_docking.control.jit import kernel
 
 #: friction modes as the kernels number them
-FRICTION_CODES = {FrictionComp.torque: 0, FrictionComp.velocity: 1, FrictionComp.torque_unbiased: 2}
+FRICTION_CODES = {
+    FrictionComp.torque: 0,
+    FrictionComp.velocity: 1,
+    FrictionComp.torque_unbiased: 2,
+    FrictionComp.yielding: 3,
+}
+#: yielding: joint speed against the feed-forward from which it is off [rad/s]
+YIELD_SPEED = 0.02
 
 
 def friction_code(mode: FrictionComp | str) -> int:
@@ -64,12 +72,16 @@ def cholesky_solve(L, x):
 def friction_feed_forward(tau_pre, v, h, f, b, scale, mode, out):
     """Twin of ``control.base.FrictionFeedForward.__call__`` (mode: :data:`FRICTION_CODES`):
     out = f·tanh(x) + b·v with x = 2τ_pre/f (torque), v/0.01 (velocity) or 2(τ_pre − h)/f
-    (torque_unbiased); ``scale`` holds the factor of each mode."""
+    (torque_unbiased); ``scale`` holds the factor of each mode. yielding: torque_unbiased's
+    y = tanh(2(τ_pre − h)/f) times 1 − min(|v|/0.02, 1) where v·y < 0: out = f·y' + b·v."""
     for i in range(out.shape[0]):
         if mode == 1:
             x = v[i] * scale[i]
-        elif mode == 2:
+        elif mode == 2 or mode == 3:
             x = (tau_pre[i] - h[i]) * scale[i]
         else:
             x = tau_pre[i] * scale[i]
-        out[i] = math.tanh(x) * f[i] + b[i] * v[i]
+        y = math.tanh(x)
+        if mode == 3 and v[i] * y < 0.0:  # the joint moves against it: yield
+            y *= 1.0 - min(abs(v[i]) / YIELD_SPEED, 1.0)
+        out[i] = y * f[i] + b[i] * v[i]

@@ -151,6 +151,8 @@ class DockingEnv(gym.Env):
         draw = int(seed) if seed is not None else int(self.np_random.integers(0, MAX_SEED))
         cfg = copy.deepcopy(self.cfg)
         cfg.task.misalignment.seed = draw
+        if "lead_limit" in cfg.trajectory:  # the policy moves the reference itself
+            cfg.trajectory.lead_limit = None
         self._capture.close()  # an episode left unfinished
         self._warnings = self._capture.enter_context(mjlog.captured())
         sim = prepare(cfg)

@@ -86,6 +86,14 @@ class Planner(ABC):
 
     #: time at which the planned motion ends [s]
     duration: float
+    #: the bound on the reference's lead over the plug along the insertion axis [m]
+    #: (planning/lead.py; None: the open-loop reference)
+    lead_limit: float | None = None
+
+    def intended_lead(self, t: np.ndarray) -> np.ndarray:
+        """The part of the reference at the times ``t`` meant to lead the plug (N×3, world):
+        none by default; the press home's offset for :class:`PressHome`."""
+        return np.zeros((len(t), 3))
 
     @property
     def segments(self) -> list[tuple[str, float, float]]:
@@ -126,6 +134,7 @@ class PressHome(Planner):
             raise ValueError(f"task.press_duration must be > 0 s, got {press_duration}")
         self.inner = inner
         self.duration = inner.duration
+        self.lead_limit = inner.lead_limit
         self.offset = np.asarray(offset, dtype=float)
         self.press_duration = float(press_duration)
 
@@ -133,6 +142,10 @@ class PressHome(Planner):
     def segments(self) -> list[tuple[str, float, float]]:
         end = self.duration
         return [*self.inner.segments, ("press", end, end + self.press_duration)]
+
+    def intended_lead(self, t: np.ndarray) -> np.ndarray:
+        s, _, _ = quintic_scaling((np.asarray(t, dtype=float) - self.duration) / self.press_duration)
+        return np.outer(s, self.offset)
 
     def table(self, t: np.ndarray) -> ReferenceTable:
         out = self.inner.table(t)

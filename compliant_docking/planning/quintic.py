@@ -13,10 +13,11 @@ from compliant_docking.planning.base import (
     Waypoints,
     quintic_scaling,
 )
+from compliant_docking.planning.lead import checked_lead_limit
 
 
 class QuinticPlanner(Planner):
-    def __init__(self, waypoints: Waypoints, *, duration: float, name: str):
+    def __init__(self, waypoints: Waypoints, *, duration: float, name: str, lead_limit: float | None):
         if waypoints.goal is None:
             raise ValueError(
                 "trajectory=quintic needs a goal (a target); with target=none use trajectory=tracking"
@@ -24,6 +25,7 @@ class QuinticPlanner(Planner):
         if not duration > 0.0:
             raise ValueError(f"trajectory.duration must be > 0 s, got {duration}")
         self.duration = float(duration)
+        self.lead_limit = checked_lead_limit(lead_limit)
         self._start = waypoints.start.translation.copy()
         self._delta = waypoints.goal.translation - self._start
         self._rot = waypoints.start.rotation.copy()

@@ -71,6 +71,7 @@ import pinocchio as pin
 from scipy.special import ellipj, ellipkinc
 
 from compliant_docking.planning.base import Planner, ReferenceTable, Waypoints
+from compliant_docking.planning.lead import checked_lead_limit
 from compliant_docking.planning.twophase import MIN_LENGTH, docking_waypoints, rotation_path, segment_index
 
 log = logging.getLogger(__name__)
@@ -327,6 +328,7 @@ class SE3ToppPlanner(Planner):
         omega_max_docking: float,
         alpha_max_docking: float,
         name: str,
+        lead_limit: float | None,
     ):
         self.limits = {
             "approach": Limits(
@@ -342,6 +344,7 @@ class SE3ToppPlanner(Planner):
         for seg, lim in self.limits.items():
             lim.check(seg)
         pieces, self.notes = docking_waypoints(waypoints, float(standoff), "se3topp")
+        self.lead_limit = checked_lead_limit(lead_limit)
         for note in self.notes:
             log.info(note)
         self._screws: list[_Screw] = []

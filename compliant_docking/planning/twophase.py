@@ -31,6 +31,7 @@ from compliant_docking.planning.base import (
     Waypoints,
     quintic_scaling,
 )
+from compliant_docking.planning.lead import checked_lead_limit
 
 log = logging.getLogger(__name__)
 
@@ -113,6 +114,7 @@ class TwoPhasePlanner(Planner):
         v_max_docking: float,
         a_max_docking: float,
         name: str,
+        lead_limit: float | None,
     ):
         limits = {
             "approach": (float(v_max_approach), float(a_max_approach)),
@@ -122,6 +124,7 @@ class TwoPhasePlanner(Planner):
             if not (v > 0.0 and a > 0.0):
                 raise ValueError(f"trajectory.v_max_{seg} and a_max_{seg} must be > 0, got {v}, {a}")
         pieces, self.notes = docking_waypoints(waypoints, float(standoff), "twophase")
+        self.lead_limit = checked_lead_limit(lead_limit)
         for note in self.notes:
             log.info(note)
         self._segments: list[tuple[str, float, float]] = []

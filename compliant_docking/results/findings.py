@@ -20,7 +20,10 @@ the draws are common random numbers), and writes the finding as Markdown:
 - the cost: success rate of each with its Wilson interval and McNemar's exact test on the
   pairs; docking time (``docking_time_s``) paired on the draws both docked in place;
 - the verdict in words, and whether the reported −81 % lies inside the interval;
-- the sweep's git commit(s), command line and the command that wrote the file.
+- the sweep's git commit(s), command line and the command that wrote the file;
+- with ``--before SWEEP_DIR`` (the same comparison on an earlier version): how sensitive
+  the answer is to what changed in between, the verdicts and per cell (robot, controller,
+  planner) the success and the medians of the forces, before and after.
 """
 
 from __future__ import annotations
@@ -273,6 +276,69 @@ def findings_markdown(
     return "\n".join(lines)
 
 
+def _cell_line(part: pd.DataFrame) -> tuple[str, str, str, str]:
+    """Docked count and the medians of the filtered peak, raw peak and first strike of a cell."""
+    docked = f"{int(part['success'].fillna(False).astype(bool).sum())}/{len(part)}"
+    medians = [
+        pd.to_numeric(part.get(k, pd.Series(dtype=float)), errors="coerce").median() for k, _ in FORCES
+    ]
+    strike, raw, filtered = medians
+    return docked, _num(filtered), _num(raw), _num(strike)
+
+
+def sensitivity_markdown(
+    before: pd.DataFrame, after: pd.DataFrame, before_dir: Path, robot: str, baseline: str, candidate: str
+) -> list[str]:
+    """The section comparing the answer and every cell of ``robot`` before and after."""
+    rows = []
+    for label, frame in (("before", before), ("after", after)):
+        merged = pairs(frame[frame["robot"].astype(str) == robot], baseline, candidate)
+        pooled = force_rows(merged, label) if not merged.empty else []
+        for p, r in zip(stats.holm([r["p_value"] for r in pooled]), pooled):
+            r["p_holm"] = p
+        rows += pooled
+    verdicts = [
+        [r["group"], r["metric"], str(r["n"]), f"{_num(r['median_a'])} → {_num(r['median_b'])}",
+         _ci(r["median_difference"], r["difference_low"], r["difference_high"], "N"),
+         _num(r["p_holm"], 2), "yes" if r["p_holm"] <= ALPHA else "no"]
+        for r in rows
+    ]  # fmt: skip
+    cells = []
+    keys = ["controller", "trajectory"]
+    mine_b, mine_a = (f[f["robot"].astype(str) == robot] for f in (before, after))
+    for (controller, planner), part in mine_a.groupby(keys, sort=True):
+        old = mine_b[(mine_b["controller"] == controller) & (mine_b["trajectory"] == planner)]
+        b, a = _cell_line(old) if len(old) else ("–",) * 4, _cell_line(part)
+        cells.append([str(controller), str(planner), *(f"{x} → {y}" for x, y in zip(b, a))])
+    return [
+        "## Sensitivity to this wave's changes",
+        "",
+        f"The same comparison before the changes (`{before_dir}`) and after (this sweep). Paired "
+        f"{candidate} − {baseline} differences, Holm over the three force metrics of each sweep:",
+        "",
+        _markdown_grid(
+            [
+                "sweep",
+                "metric",
+                "pairs",
+                "median a → b [N]",
+                "median of b − a [95 % CI]",
+                "p Holm",
+                "significant",
+            ],
+            verdicts,
+        ),  # fmt: skip
+        "",
+        f"Per cell ({robot}; before → after): docked, and the medians of the filtered peak, the raw "
+        "peak and the first strike [N]:",
+        "",
+        _markdown_grid(
+            ["controller", "planner", "docked", "filtered peak", "raw peak", "first strike"], cells
+        ),
+        "",
+    ]
+
+
 def main(argv: list[str] | None = None) -> int:
     """``python -m compliant_docking.results.findings``; the exit status (a signal: 128 + its number)."""
     from compliant_docking.run import interrupt
@@ -291,7 +357,11 @@ def _main(argv: list[str] | None) -> int:
     parser.add_argument("--robot", default="fr3")
     parser.add_argument("--baseline", default="impedance")
     parser.add_argument("--candidate", default="hqp")
+    parser.add_argument("--before", type=Path, default=None, help="the same comparison on an earlier "
+                        "version: adds how sensitive the answer is to what changed")  # fmt: skip
     args = parser.parse_args(argv)
+    if args.before is not None and not args.before.is_dir():
+        parser.error(f"--before {args.before} is not a directory")
     if not args.sweep.is_dir():
         parser.error(f"{args.sweep} is not a directory")
     df = load_runs(args.sweep)
@@ -303,6 +373,12 @@ def _main(argv: list[str] | None) -> int:
             ["python -m compliant_docking.results.findings", *(sys.argv[1:] if argv is None else argv)]
         )
         text = findings_markdown(df, args.sweep, args.robot, args.baseline, args.candidate, command)
+        if args.before is not None:
+            extra = sensitivity_markdown(
+                load_runs(args.before), df, args.before, args.robot, args.baseline, args.candidate
+            )
+            head, tail = text.split("## What this does and does not say", 1)
+            text = head + "\n".join(extra) + "\n## What this does and does not say" + tail
     except ValueError as exc:
         parser.error(str(exc))
     if args.out is None:

@@ -139,6 +139,8 @@ def execute(
             )
             record["loop_wall_time_s"] = sim.loop_wall_time or None
             record.update(sim.controller.diagnostics())
+            if sim.lead is not None:
+                record.update(sim.lead.diagnostics(sim.scene.model.opt.timestep))
         if episode is not None and episode.fields is not None:
             record.update(episode.fields(record))
         if interrupted is None and cfg.get("render") is not None and cfg.render.name != "none":

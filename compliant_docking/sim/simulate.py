@@ -31,6 +31,7 @@ from compliant_docking.planning.base import (
     ReferenceTable,
     Waypoints,
 )
+from compliant_docking.planning.lead import LeadLimit, bounded
 from compliant_docking.sim import model_error
 from compliant_docking.sim.context import ControlContext, StepController
 from compliant_docking.sim.models import ArmModel
@@ -70,6 +71,8 @@ class Simulation:
     arm: ArmModel | None = None
     # what the controller reads (sensor, a believed payload); None: the exact wrench and state
     sensing: Sensing | None = None
+    # the bounded reference (planning/lead.py) choosing reference's rows; None: open loop
+    lead: LeadLimit | None = None
     steps_done: int = 0  # steps simulated so far: the index of the next one
     # the wrench handed to the controller at the last step (start() makes it)
     wrench: np.ndarray = field(default_factory=lambda: np.zeros(6), init=False)
@@ -122,11 +125,20 @@ class Simulation:
         start = time.perf_counter()
         # The planner's work is part of the loop's time: its table of every step first.
         self.reference = self.planner.table(np.arange(self.n_steps) * dt)
+        self.lead = bounded(self.planner, self.reference, self.waypoints.axis)
+        row = self.reference.row
+        if self.lead is not None:  # the row chosen for the TCP position of the step
+            # as the controller knows it: its own model, updated from what it reads
+            lead_row, believed = self.lead.row, arm
+
+            def row(k: int, ref: Reference) -> Reference:
+                return lead_row(k, ref, believed.pos)
+
         self.wrench = wrench
         log = self.telemetry
         # bound once: MuJoCo's arrays are views made at each attribute access
         self._loop = (
-            (read_wrench, reporter, on_step, Reference(), self.reference.row, wrench, measured),
+            (read_wrench, reporter, on_step, Reference(), row, wrench, measured),
             (model, data, arm, update, log, dt),
             (data.qpos, data.qvel, data.ctrl, log.state, log.wrench, log.contacts),
             data.warning[mujoco.mjtWarning.mjWARN_BADQACC],

@@ -70,3 +70,25 @@ def test_friction_feedforward_unbiased_mode_ignores_the_bias_torques():
     assert np.allclose(ff(tau, v, np.zeros(3)), FrictionFeedForward(f, b, FrictionComp.torque)(tau, v))
     with pytest.raises(ValueError, match="torque_unbiased"):
         ff(tau, v)
+
+
+def test_friction_feedforward_yielding_never_pushes_against_the_motion():
+    """``yielding``: torque_unbiased on a joint at rest or moving with it; on a joint moving
+    against it, scaled by 1 − |v|/0.02 rad/s and off from 0.02 rad/s on. So beyond the
+    damping term b·v it never opposes a motion faster than 0.02 rad/s (a joint the contact
+    drives against the command, e.g. the plug pushed sideways by the funnel)."""
+    f = np.array([1.0, 1.0, 1.0, 1.0, 0.0])
+    b = np.array([0.2, 0.2, 0.2, 0.2, 0.0])
+    h = np.array([-30.0, 5.0, 17.0, 0.0, 1.0])
+    tau = h + np.array([0.3, 0.3, -0.2, 0.4, 2.0])  # the command beyond h: + + − +
+    v = np.array([0.0, 0.05, 0.05, -0.01, 1.0])  # at rest, with, against, half-speed against
+    ff = FrictionFeedForward(f, b, FrictionComp.yielding)
+    unbiased = np.tanh(2 * (tau - h) / np.where(f > 0, f, 1))
+    expected = f * unbiased * np.array([1.0, 1.0, 0.0, 0.5, 1.0]) + b * v
+    assert np.allclose(ff(tau.copy(), v, h), expected)
+    rng = np.random.default_rng(3)
+    for _ in range(200):  # random commands and speeds: (ff − b·v)·v ≥ 0 wherever |v| ≥ 0.02
+        v = rng.standard_normal(5) * 0.05
+        moved = ff(h + rng.standard_normal(5), v, h) - b * v
+        fast = np.abs(v) >= FrictionFeedForward.YIELD_SPEED
+        assert np.all(moved[fast] * v[fast] >= 0.0)

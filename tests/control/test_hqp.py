@@ -288,7 +288,11 @@ def _run_without_joint_friction(out_dir, *overrides):
 
     sim = prepare(make_cfg("robot=fr3", "task.progress=false", *overrides))
     sim.scene.model.dof_frictionloss[:] = 0.0
-    sim.controller.friction.f[:] = 0.0
+    ctrl = sim.controller
+    ctrl.friction.f[:] = 0.0
+    ctrl.friction.active = False
+    if hasattr(ctrl, "_init_kernel"):  # hqp's compiled step holds its own copy of f
+        ctrl._init_kernel(ctrl._cst.size)
     sim.run()
     out_dir.mkdir(parents=True, exist_ok=True)
     return sim, evaluate(sim, out_dir, figures=False)

@@ -152,6 +152,19 @@ def test_kernel_integral_action_lateral_and_clamped():
     )
 
 
+def test_kernel_integral_action_unlatched():
+    """The research code's freeze (only while ‖f‖ exceeds the freeze force), the branch the
+    default latch skips once it froze."""
+    _check_steps(
+        "iiwa14",
+        "controller.integral_gain=2000",
+        "controller.integral_latch=false",
+        "controller.integral_freeze_force=3",
+        steps=30,
+        seed=4,
+    )
+
+
 def test_kernel_floor_branch():
     """A condition threshold of 10 floors Λ⁻¹ at every random state."""
     seen = _check_steps("iiwa14", "controller.condition_threshold=10", steps=30, seed=2)

@@ -13,7 +13,7 @@ FREE = np.zeros(6)
 
 
 def test_position_integral_lateral_freeze_and_clamp():
-    pi = PositionIntegral(100.0, 2.0, AXIS, 0.001, lateral_only=True, freeze_force=1.0)
+    pi = PositionIntegral(100.0, 2.0, AXIS, 0.001, lateral_only=True, freeze_force=1.0, latch=False)
     for _ in range(1000):  # 1 s of a 1 mm error along x and 5 mm along the axis
         force = np.array(pi.update(np.array([0.001, 0.0, -0.005]), FREE))
     assert np.allclose(force, [100.0 * 0.001 * 1.0, 0.0, 0.0])  # ki ∫e dt, axis ignored
@@ -27,16 +27,36 @@ def test_position_integral_lateral_freeze_and_clamp():
     assert np.linalg.norm(force) == pytest.approx(2.0)
     force = pi.update(np.array([-0.01, 0.0, 0.0]), FREE)  # a reversed error acts at once
     assert np.linalg.norm(force) < 2.0
-    every_axis = PositionIntegral(100.0, 2.0, AXIS, 0.001, lateral_only=False, freeze_force=1.0)
+    every_axis = PositionIntegral(100.0, 2.0, AXIS, 0.001, lateral_only=False, freeze_force=1.0, latch=False)
     assert every_axis.update(np.array([0.0, 0.0, -0.005]), FREE)[2] == pytest.approx(-0.0005)
     assert every_axis.diagnostics()["integral_final_force_N"] == pytest.approx(0.0005)
 
 
+def test_latched_integral_cannot_wind_up_in_a_fall():
+    """A scripted force history: free space with a 1 mm offset (the integral learns it), a
+    contact (5 N: frozen), then the contact lost with a 10 mm error, as when a plug stuck on
+    the chamfer falls towards the seat. Latched, the integral keeps the value it had at the
+    contact; the research code's freeze winds it up to the clamp in the fall."""
+    contact = np.array([0.0, 0.0, 5.0, 0.0, 0.0, 0.0])
+    history = [(np.array([0.001, 0.0, 0.0]), FREE)] * 200  # 0.2 s free, 1 mm off
+    history += [(np.array([0.001, 0.0, 0.0]), contact)] * 10  # first contact
+    history += [(np.array([0.0, 0.0, -0.010]), FREE)] * 500  # the fall: 10 mm behind, no force
+    forces = {}
+    for latch in (True, False):
+        pi = PositionIntegral(2000.0, 10.0, AXIS, 0.001, lateral_only=False, freeze_force=1.0, latch=latch)
+        trace = [np.array(pi.update(e, w)) for e, w in history]
+        forces[latch] = trace
+    at_contact = forces[True][200]
+    assert np.allclose(at_contact, [2000.0 * 0.001 * 0.2, 0.0, 0.0])  # ki · 1 mm · 0.2 s = 0.4 N
+    assert all(np.array_equal(f, at_contact) for f in forces[True][200:])
+    assert np.linalg.norm(forces[False][-1]) == pytest.approx(10.0)  # wound up to the clamp
+
+
 def test_position_integral_rejects_meaningless_settings():
     with pytest.raises(ValueError, match="integral_gain"):
-        PositionIntegral(0.0, 2.0, AXIS, 0.001, lateral_only=False, freeze_force=1.0)
+        PositionIntegral(0.0, 2.0, AXIS, 0.001, lateral_only=False, freeze_force=1.0, latch=False)
     with pytest.raises(ValueError, match="integral_freeze_force"):
-        PositionIntegral(10.0, 2.0, AXIS, 0.001, lateral_only=False, freeze_force=-1.0)
+        PositionIntegral(10.0, 2.0, AXIS, 0.001, lateral_only=False, freeze_force=-1.0, latch=False)
 
 
 def test_integral_gain_zero_means_no_integral():

@@ -40,7 +40,7 @@ def _pair(sim):
     params = OmegaConf.to_container(sim.cfg.controller, resolve=True)
     params.pop("_target_")
     assert params["apparent_inertia_floor"] and params["integral_gain"]
-    assert params["friction_comp"] == FrictionComp.torque_unbiased and sim.controller.friction.active
+    assert params["friction_comp"] == FrictionComp.yielding and sim.controller.friction.active
     make = lambda form: SE3LieController(sim.controller.ctx, **{**params, "formulation": form})  # noqa: E731
     return make("twist"), make("lambda_space")
 

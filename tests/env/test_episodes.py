@@ -70,7 +70,8 @@ def test_a_vector_env_over_two_processes_gives_each_seed_its_episode():
 
 def test_an_episode_is_written_as_the_run_directory_of_its_seed(tmp_path):
     """A zero-action episode is the run, bit for bit: its time series equals the one the
-    runner writes for the same config with task.misalignment.seed, and load_runs reads it."""
+    runner writes for the same config with task.misalignment.seed (and the open-loop
+    reference the environment uses), and load_runs reads it."""
     env = make_env(*SHORT, *DRAWN, f"env.record_dir={tmp_path / 'episodes'}")
     _, info = env.reset(seed=4)
     while True:
@@ -86,7 +87,8 @@ def test_an_episode_is_written_as_the_run_directory_of_its_seed(tmp_path):
     assert row["env_return"] == pytest.approx(record["env_return"]) and row["status"] == "ok"
     assert row["controller.k"] == 50.0  # the composed config's leaves
     reference = tmp_path / "run"
-    execute(make_cfg(*SHORT, *DRAWN, "task.misalignment.seed=4"), reference, figures=False, echo=False)
+    cfg = make_cfg(*SHORT, *DRAWN, "task.misalignment.seed=4", "trajectory.lead_limit=null")
+    execute(cfg, reference, figures=False, echo=False)
     pd.testing.assert_frame_equal(
         pd.read_parquet(f"{run_dir}/timeseries.parquet"), pd.read_parquet(reference / "timeseries.parquet")
     )

@@ -31,11 +31,17 @@ def test_table_equals_sample(make):
 
 
 # --------------------------------------------------------------------------- configs
-#: each planner's defaults as docs/control_laws.md §4 states them (Table 8 for se3topp)
+#: each planner's defaults as docs/control_laws.md §4 states them (Table 8 for se3topp), and
+#: the docking planners' bound on the reference's lead (docs/planners.md)
 SPEC_DEFAULTS = {
-    "quintic": dict(duration=15.0),
+    "quintic": dict(duration=15.0, lead_limit=0.012),
     "twophase": dict(
-        standoff=0.10, v_max_approach=0.10, a_max_approach=0.20, v_max_docking=0.02, a_max_docking=0.05
+        standoff=0.10,
+        v_max_approach=0.10,
+        a_max_approach=0.20,
+        v_max_docking=0.02,
+        a_max_docking=0.05,
+        lead_limit=0.012,
     ),
     "se3topp": dict(
         standoff=0.10,
@@ -47,6 +53,7 @@ SPEC_DEFAULTS = {
         a_max_docking=0.05,
         omega_max_docking=0.05,
         alpha_max_docking=0.05,
+        lead_limit=0.012,
     ),
     "tracking": dict(
         transition_duration=1.5,

@@ -67,3 +67,23 @@ def test_the_command_refuses_a_sweep_without_the_controllers(tmp_path, capsys):
     with pytest.raises(SystemExit):
         main([str(tmp_path / "empty")])
     assert "no finished jobs" in capsys.readouterr().err
+
+
+def test_the_sensitivity_section_puts_the_verdicts_and_cells_side_by_side(tmp_path):
+    """Before: no effect; after: hqp 5 N softer. The section says the verdict changed and
+    gives every cell's success and medians before → after."""
+    from compliant_docking.results.findings import sensitivity_markdown
+
+    before, after = sweep(12, effect=False), sweep(12)
+    after.loc[(after["controller"] == "impedance") & (after["task.misalignment.seed"] == 0), "success"] = (
+        False
+    )
+    text = "\n".join(sensitivity_markdown(before, after, tmp_path, "fr3", "impedance", "hqp"))
+    rows = {line.split("|")[1].strip() + line.split("|")[2].strip(): line for line in text.splitlines()
+            if line.startswith("| before") or line.startswith("| after")}  # fmt: skip
+    assert rows["beforefirst-strike force"].rstrip("| ").endswith("no")
+    assert rows["afterfirst-strike force"].rstrip("| ").endswith("yes")
+    imp = after[(after["robot"] == "fr3") & (after["controller"] == "impedance")]
+    median = float(imp["filtered_peak_axial_force_N"].median())
+    cell = next(line for line in text.splitlines() if line.startswith("| impedance"))
+    assert "12/12 → 11/12" in cell and f"→ {median:.3g}" in cell

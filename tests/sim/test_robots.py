@@ -53,12 +53,13 @@ def test_per_robot_gains_are_in_the_composed_config():
 #: the FR3 gain files (apparent-inertia floor 0.75, integral action 2000 N/(m·s)): the spring
 #: k·5 mm = 1.5 N, the integral force frozen at first contact (0.9 N) and what the joints'
 #: friction holds. In zero gravity torque_unbiased and torque differ only by C·v (≈ 0 here).
-STEADY_FORCE = {"torque_unbiased": (3.986, 3.986), "torque": (3.986, 3.986)}
-#: measured peak axial force [N]: the press home, not an impact (first strike 2.1 N)
-PEAK_FORCE = {"torque_unbiased": (5.26, 5.26), "torque": (5.26, 5.26)}
+STEADY_FORCE = {"yielding": (3.998, 3.998), "torque_unbiased": (3.986, 3.986), "torque": (3.986, 3.986)}
+#: measured peak axial force [N]: the press home, not an impact (first strike 2.0 N); the
+#: bounded reference (trajectory.lead_limit) lets the stuck plug go with at most 12 mm of lead
+PEAK_FORCE = {"yielding": (7.11, 7.62), "torque_unbiased": (6.93, 7.04), "torque": (6.92, 7.03)}
 
 
-@pytest.mark.parametrize("friction_comp", ["torque_unbiased", "torque"])
+@pytest.mark.parametrize("friction_comp", ["yielding", "torque_unbiased", "torque"])
 @pytest.mark.parametrize("controller", ["impedance", "se3_lie"])
 def test_fr3_docks_the_default_scene(tmp_path, controller, friction_comp):
     """Both torque-following feed-forward modes seat the plug straight, calmly, and pass the gate.
@@ -98,12 +99,14 @@ def test_fr3_velocity_mode_lands_on_the_funnel_off_the_axis(tmp_path, controller
     floored arm lags its reference sideways and lands on the funnel ~5 mm off the axis
     (measured 5.0 mm), striking it at 65-70 N per step (raw). The strike is short: its
     filtered peak (the 50 ms mean the gate judges) is about 7 N, so the funnel guides the
-    plug home and the run docks; the torque modes arrive on the axis instead."""
+    plug home and the run docks (with the open-loop reference, which keeps pushing while the
+    plug sticks on the funnel); the torque modes arrive on the axis instead."""
     record = execute(
         make_cfg(
             "robot=fr3",
             f"controller={controller}",
             "controller.friction_comp=velocity",
+            "trajectory.lead_limit=null",
             "task.progress=false",
         ),
         tmp_path,

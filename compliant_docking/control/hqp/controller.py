@@ -177,12 +177,13 @@ class HQPController(Controller):
         if self.integral is not None:  # its update runs in the kernel (kernel.integral_step)
             integral = self.integral
             lateral = integral.axis is not None
-            cst[K.P_I_GAIN : K.P_I_LATERAL + 1] = (
+            cst[K.P_I_GAIN : K.P_I_LATCH + 1] = (
                 integral.gain,
                 integral.limit,
                 integral.dt,
                 integral.freeze_sq,
                 lateral,
+                integral.latch,
             )
         parts = (self.K0, self._P, self.axis, self._T_ji, self._half, friction.f, friction.b, friction._scale)
         for start, part in zip(self._off, parts):
@@ -383,6 +384,7 @@ class HQPController(Controller):
             integral.state = tuple(ws[K.W_I_STATE : K.W_I_STATE + 3].tolist())
             integral.force = tuple(ws[K.W_INTEGRAL : K.W_INTEGRAL + 3].tolist())
             integral.frozen_steps, integral.max_force = int(ws[K.W_I_FROZEN]), float(ws[K.W_I_MAX])
+            integral.latched = bool(ws[K.W_I_LATCHED])
 
     def diagnostics(self) -> dict:
         self._sync_integral()

@@ -27,14 +27,15 @@ FAST, SLOW, SLOW_OK1, MODAL, NOT_FINITE = 0, 1, 2, 3, 4
 # scalar parameters at the head of ``cst``
 P_DEADBAND, P_KMIN, P_KALPHA, P_THRESH, P_OMEGA, P_KSA = 0, 1, 2, 3, 4, 5
 P_INERTIA, P_USE_FF, P_FRICTION, P_FRICTION_MODE, P_EVERY, P_INTEGRAL, P_REG = 6, 7, 8, 9, 10, 11, 12
-P_I_GAIN, P_I_LIMIT, P_I_DT, P_I_FREEZE_SQ, P_I_LATERAL = 13, 14, 15, 16, 17  # integral action
-N_PAR = 18
+P_I_GAIN, P_I_LIMIT, P_I_DT, P_I_FREEZE_SQ, P_I_LATERAL, P_I_LATCH = 13, 14, 15, 16, 17, 18  # integral
+N_PAR = 19
 # scalar state and results at the head of ``ws``
 W_PRELOAD = 0  # 4 floats: value, in contact, step, target (compliance.preload_step)
 W_FLOOR, W_MAX_COND, W_SINGULAR, W_FAST = 4, 5, 6, 7  # counters and the largest cond(Λ⁻¹)
 W_F, W_S, W_W, W_SQRT_S, W_INTEGRAL = 8, 9, 10, 11, 12  # F, s, w, √s, F_i (3)
 W_I_STATE, W_I_FROZEN, W_I_MAX = 15, 18, 19  # the integral's ∫P e dt (3), frozen steps, max ‖F_i‖
-N_SCALARS = 20
+W_I_LATCHED = 20  # 1 once the latched integral froze for good
+N_SCALARS = 21
 #: contact magnitude above which the preload ramps up [N] (docs/control_laws.md §2)
 PRELOAD_CONTACT_N = 1.0
 #: contact magnitude below which the contact counts as lost again [N] (hysteresis)
@@ -132,8 +133,9 @@ def integral_step(cst, ws, wrench, e0, e1, e2, u0, u1, u2):
     """control.integral.PositionIntegral.update, compiled (the same float operations in the
     same order; the state in ws, the parameters in cst, u the docking axis)."""
     f0, f1, f2 = wrench[0], wrench[1], wrench[2]
-    if f0 * f0 + f1 * f1 + f2 * f2 > cst[P_I_FREEZE_SQ]:
+    if ws[W_I_LATCHED] != 0.0 or f0 * f0 + f1 * f1 + f2 * f2 > cst[P_I_FREEZE_SQ]:
         ws[W_I_FROZEN] += 1.0
+        ws[W_I_LATCHED] = cst[P_I_LATCH]
         return
     if cst[P_I_LATERAL] != 0.0:  # drop the component along the docking axis
         along = e0 * u0 + e1 * u1 + e2 * u2
