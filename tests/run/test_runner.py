@@ -81,7 +81,7 @@ def test_diverging_run_fails_cleanly(tmp_path):
 )
 def test_bad_config_fails_at_composition(tmp_path, override, message):
     result = run_cli(override, f"hydra.run.dir={tmp_path / 'run'}")
-    assert result.returncode == 1
+    assert result.returncode == 2
     assert message in result.stderr
     assert not (tmp_path / "run").exists()  # nothing written
 

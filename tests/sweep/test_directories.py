@@ -77,7 +77,7 @@ def test_a_sweep_whose_jobs_share_or_leave_its_directory_is_refused(
     code, err = cli_in_process(
         capsys, "-m", *TINY, f"hydra.sweep.dir={tmp_path / 'sweep'}", f"hydra.sweep.subdir={subdir}"
     )
-    assert code == 1 and message in err
+    assert code == 2 and message in err
     assert err.startswith("compliant-docking: the sweep is refused; nothing was run or written.")
     assert sorted(os.listdir(tmp_path)) == []
 
@@ -94,7 +94,7 @@ def test_a_run_into_a_used_run_directory_is_refused_and_mixes_nothing(tmp_path, 
     code, err = cli_in_process(
         capsys, "trajectory.duration=0.2", "task.progress=false", f"hydra.run.dir={used}"
     )
-    assert code == 1
+    assert code == 2
     assert (
         f"hydra.run.dir={used} is not empty (figures, metrics.json): a run writes into a new or empty" in err
     )
@@ -112,7 +112,7 @@ def test_a_sweep_into_a_used_sweep_directory_is_refused_and_keeps_it_resumable(t
     (used / "multirun.yaml").write_text("hydra: {overrides: {task: [controller.k=50]}}\n")
     before = _tree(used)
     code, err = cli_in_process(capsys, "-m", *TINY, f"hydra.sweep.dir={used}")
-    assert code == 1
+    assert code == 2
     assert f"hydra.sweep.dir={used} is not empty (0_controller.k=50, multirun.yaml)" in err
     assert f"to finish the sweep in it, run that sweep's command with resume={used}" in err
     assert _tree(used) == before
@@ -127,9 +127,9 @@ def test_an_explicit_directory_inside_a_sweep_is_refused(tmp_path, monkeypatch, 
     code, err = cli_in_process(
         capsys, "trajectory.duration=0.2", "task.progress=false", f"hydra.run.dir={sweep}/extra"
     )
-    assert code == 1 and f"hydra.run.dir={sweep}/extra lies inside the sweep directory {sweep}" in err
+    assert code == 2 and f"hydra.run.dir={sweep}/extra lies inside the sweep directory {sweep}" in err
     code, err = cli_in_process(capsys, "-m", *TINY, f"hydra.sweep.dir={sweep}/a/b")
-    assert code == 1 and "lies inside the sweep directory" in err
+    assert code == 2 and "lies inside the sweep directory" in err
     assert sorted(p.name for p in sweep.iterdir()) == ["multirun.yaml"]
 
 
@@ -200,7 +200,7 @@ def test_a_resume_that_would_move_its_jobs_is_refused_and_touches_nothing(
     (victim / "data.txt").write_text("keep me")
     sweep_before, parent_before = _tree(finished_sweep), _tree(finished_sweep.parent)
     result = _sweep(finished_sweep, f"resume={finished_sweep}", *(m.format(victim=victim) for m in moves))
-    assert result.returncode == 1, result.stdout[-2000:] + result.stderr[-2000:]
+    assert result.returncode == 2, result.stdout[-2000:] + result.stderr[-2000:]
     assert result.stderr.startswith("resume: ") and message in result.stderr
     assert "Traceback" not in result.stderr
     assert (victim / "data.txt").read_text() == "keep me" and sorted(os.listdir(victim)) == ["data.txt"]
@@ -216,7 +216,7 @@ def test_a_resume_that_finds_job_directories_it_would_not_write_is_refused(finis
     (stray / ".hydra").mkdir(parents=True)
     before = _tree(copy)
     result = _sweep(copy, f"resume={copy}")
-    assert result.returncode == 1
+    assert result.returncode == 2
     assert (
         "the sweep holds job directories that none of this command's jobs would write (7_controller.k=70)"
         in (result.stderr)

@@ -53,7 +53,7 @@ def test_sweep_with_viewer_is_refused_before_anything_runs(tmp_path):
         f"hydra.sweep.dir={sweep}",
         "hydra.callbacks.sweep.figures=false",
     )
-    assert result.returncode == 1
+    assert result.returncode == 2
     assert "viewer=true is refused in a sweep (-m)" in result.stderr
     assert "resume" not in result.stdout + result.stderr and "Traceback" not in result.stderr
     assert not sweep.exists()
