@@ -239,10 +239,7 @@ def test_a_job_name_too_long_for_a_file_name_is_shortened_with_a_hash():
     from compliant_docking.config.resolvers import NAME_BYTES, job_dir
 
     assert job_dir(3, "controller.k=50,robot=fr3") == "3_controller.k=50,robot=fr3"  # as Hydra named it
-    assert (
-        job_dir(0, "") == "0_"
-        and job_dir(2, "tool.mjcf=my_parts/tool.xml") == "2_tool.mjcf=my_parts/tool.xml"
-    )
+    assert job_dir(0, "") == "0_" and job_dir(2, "tool.mjcf=tool.xml") == "2_tool.mjcf=tool.xml"
     long = "robot.max_torque=[" + ",".join(["10.000000000001"] * 7) + "]," + "x" * 300
     name = job_dir(12, long)
     assert len(name.encode()) <= NAME_BYTES and "/" not in name
@@ -250,6 +247,25 @@ def test_a_job_name_too_long_for_a_file_name_is_shortened_with_a_hash():
     assert name != job_dir(13, long) and name != job_dir(12, long + "y")  # unique
     wide = job_dir(1, "task.note=" + "é" * 200)  # two bytes a character: cut between characters
     assert len(wide.encode()) <= NAME_BYTES and wide.encode().decode() == wide
+
+
+def test_a_file_path_in_a_job_name_is_its_folder_and_stem_one_directory_deep():
+    """Before: the README's CAD sweep named its jobs ``0_…,target.mjcf=assets/interfaces/
+    keyed_cad/target.xml,tool.mjcf=assets/…/tool.xml``, seven directories deep, and every job
+    was called ``tool.xml`` in the progress lines, summary.md and load_runs."""
+    from compliant_docking.config.resolvers import job_dir
+
+    cad = "assets/interfaces/keyed_cad"
+    name = job_dir(0, f"controller=hqp,robot=fr3,target.mjcf={cad}/target.xml,tool.mjcf={cad}/tool.xml")
+    assert name == "0_controller=hqp,robot=fr3,target.mjcf=keyed_cad-target,tool.mjcf=keyed_cad-tool"
+    assert job_dir(1, "tool.mjcf=/home/me/parts/plug.xml") == "1_tool.mjcf=parts-plug"
+    # two paths of one job that would read the same: a hash of each path tells them apart
+    twins = job_dir(2, "tool.mjcf=a/parts/plug.xml,target.mjcf=b/parts/plug.xml")
+    first, second = (part.split("=")[1] for part in twins.split(","))
+    assert "/" not in twins and first != second and first.startswith("parts-plug~")
+    assert twins == job_dir(2, "tool.mjcf=a/parts/plug.xml,target.mjcf=b/parts/plug.xml")  # stable
+    # values with Hydra's own syntax are left as Hydra wrote them
+    assert job_dir(3, "controller.m=tag(log,interval(1,10))") == "3_controller.m=tag(log,interval(1,10))"
 
 
 def test_the_sweep_job_directory_template_shortens_long_names():
