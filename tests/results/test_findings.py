@@ -2,11 +2,15 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
+import pandas as pd
 import pytest
 from scipy.stats import wilcoxon
 
 from compliant_docking.results.findings import findings_markdown, main, pairs
+from tests.helpers import REPO_ROOT
 from tests.results.test_compare import frame
 
 
@@ -67,3 +71,26 @@ def test_the_command_refuses_a_sweep_without_the_controllers(tmp_path, capsys):
     with pytest.raises(SystemExit):
         main([str(tmp_path / "empty")])
     assert "no finished jobs" in capsys.readouterr().err
+
+
+def test_the_command_writes_beside_the_sweep_and_the_docs_only_when_asked(tmp_path, monkeypatch, capsys):
+    """Before: the README's command rewrote the tracked docs/findings.md, which flipped
+    ``git_dirty`` in every later run's provenance."""
+    from compliant_docking.results import findings
+
+    sweep = tmp_path / "sweep"
+    sweep.mkdir()
+    frame = pd.DataFrame({"robot": ["fr3"], "controller": ["hqp"], "trajectory": ["quintic"]})
+    monkeypatch.setattr(findings, "load_runs", lambda path: frame)
+    monkeypatch.setattr(findings, "findings_markdown", lambda *args: "# the finding\n")
+    written: dict = {}
+    monkeypatch.setattr(
+        "compliant_docking.run.files.atomic_write_text", lambda path, text: written.update({Path(path): text})
+    )
+    assert main([str(sweep)]) == 0
+    assert written == {sweep / "findings.md": "# the finding\n"}
+    assert main([str(sweep), "--out", str(tmp_path / "mine.md")]) == 0 and tmp_path / "mine.md" in written
+    capsys.readouterr()
+    assert main([str(sweep), "--out", "-"]) == 0 and capsys.readouterr().out == "# the finding\n\n"
+    assert main([str(sweep), "--docs"]) == 0
+    assert REPO_ROOT / "docs" / "findings.md" in written and len(written) == 3
