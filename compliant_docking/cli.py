@@ -39,7 +39,7 @@ from omegaconf import DictConfig, OmegaConf
 from compliant_docking import CONF_DIR, exit_codes
 from compliant_docking.config import compose_cache, register_schemas
 from compliant_docking.run import interrupt
-from compliant_docking.sweep import launchers, resume
+from compliant_docking.sweep import launchers, progress, resume
 from compliant_docking.sweep.directories import release_empty, sweep_dir_of
 from compliant_docking.sweep.guard import Refused, refuse
 from compliant_docking.sweep.session import SweepSession
@@ -83,6 +83,7 @@ class CommandLine:
         if any(arg in ("--help", "-h") for arg in argv):
             print_help(argv)
             return 0
+        argv = progress.verbose_argv(argv)  # -v: the launchers' per-job launch lines too
         try:
             argv = resume.translate_argv(argv)  # resume=<sweep dir> → Hydra overrides
         except resume.ResumeError as exc:
@@ -232,6 +233,7 @@ Exit status (the same for every command; docs/exit_codes.md):
   2    refused before anything ran or was written (a bad key, value, file or directory)
   3    not docked: the run finished but its gate did not pass (tracking gate: FAIL)
   130 / 143 / 129  interrupted by Ctrl-C / SIGTERM / SIGHUP (what finished is recorded)
+-v (--verbose) with -m: also Hydra's launch line of every job before the first result.
 Hydra's own options: --hydra-help, --cfg job (print the composed config), --info,
 -sc install=bash (shell completion: eval "$(compliant-docking -sc install=bash)").
 """
