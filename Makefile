@@ -14,9 +14,13 @@ setup: $(STAMP)
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -c 'import sys; sys.exit("compliant-docking needs Python >= 3.11, found " + sys.version.split()[0]) if sys.version_info < (3, 11) else None'
+	@echo "setting up $(VENV) (once): compliant-docking with MuJoCo, Pinocchio, ProxSuite, Hydra, numba"
+	@echo "  and every optional feature (the test and dev extras); about 5 min on a fresh machine,"
+	@echo "  about 1.5 min with a warm pip cache. pip's own output: $(VENV)/install.log"
 	$(PYTHON) -m venv $(VENV)
-	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e '.[test,dev]'
+	$(PY) -m pip install --upgrade pip > $(VENV)/install.log 2>&1 || { tail -20 $(VENV)/install.log; exit 1; }
+	$(PY) -m pip install --progress-bar off -e '.[test,dev]' >> $(VENV)/install.log 2>&1 || { tail -20 $(VENV)/install.log; exit 1; }
+	@echo "  installed: $$($(PY) -m pip list 2>/dev/null | tail -n +3 | wc -l) packages in $(VENV)"
 	touch $(STAMP)
 
 run: $(STAMP) gl
@@ -68,6 +72,7 @@ gl: $(STAMP)
 NOTEBOOK_STAMP := $(VENV)/.notebook
 
 $(NOTEBOOK_STAMP): $(STAMP)
+	@echo "installing JupyterLab into $(VENV) (once, the notebook extra; about 1 min)"
 	$(PY) -m pip install --quiet -e '.[notebook]'
 	touch $(NOTEBOOK_STAMP)
 
