@@ -175,7 +175,7 @@ class HQPConfig(ControllerConfig):
     already gives 0.5·K0 at F = 0. K0 is this config's, never the impedance gains.
     The torque constraint uses the robot's software clip (robot.max_torque).
 
-    The keys are the seed's (HQPConfig) names, kept for the command line; in the code they
+    The keys are the research code's (HQPConfig) names, kept for the command line; in the code they
     are spelled out: K0 the maximum task stiffness, K_min_ratio the minimum stiffness
     ratio, k_alpha the sigmoid gain, omega_th the manipulability threshold, k_sa the
     singularity-avoidance weight, K_ji / D_ji the joint-posture stiffness / damping and
@@ -187,8 +187,8 @@ class HQPConfig(ControllerConfig):
     k_alpha: float = at_least(0.0, unit="1/N")  # sigmoid gain of the adaptive stiffness [1/N]
     omega_th: float = at_least(0.0)  # manipulability threshold of singularity avoidance
     k_sa: float = at_least(0.0, unit="rad/s²")  # weight of singularity avoidance [rad/s²]
-    K_ji: List[float] = at_least(0.0, unit="1/s²")  # diagonal of the seed's 5·I [1/s²]
-    D_ji: List[float] = at_least(0.0, unit="1/s")  # diagonal of the seed's 10·I [1/s]
+    K_ji: List[float] = at_least(0.0, unit="1/s²")  # diagonal of the research code's 5·I [1/s²]
+    D_ji: List[float] = at_least(0.0, unit="1/s")  # diagonal of the research code's 10·I [1/s]
     k_ji: float = at_least(0.0)
     dt_p: float = positive(at_most=1.0, unit="s")  # zero-order-hold prediction horizon of the constraints
     eps_abs: float = positive()  # ProxQP absolute accuracy
@@ -232,7 +232,7 @@ class TrajectoryConfig:
 class QuinticConfig(TrajectoryConfig):
     """Rest-to-rest quintic along the stroke, orientation held (docs/control_laws.md §4)."""
 
-    duration: float = positive(unit="s")  # the seed's DockingConfig.traj_duration [s]
+    duration: float = positive(unit="s")  # the research code's DockingConfig.traj_duration [s]
 
 
 @dataclass

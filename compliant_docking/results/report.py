@@ -4,7 +4,7 @@ PATH is anything :func:`compliant_docking.results.load_runs` reads: one run dire
 a sweep directory, a tree of them, or all of ``runs/``. Writes into PATH (or ``--out``):
 
 - ``summary.parquet``, ``summary.csv``: one row per job (the load_runs frame);
-- ``comparison.csv``, ``summary.md``: the Table-10 comparison, one column per
+- ``comparison.csv``, ``summary.md``: the docking-metrics comparison, one column per
   configuration (summary.md also lists every job);
 - ``comparison/``: ``table10_bars``, ``success_vs_misalignment`` (when the
   misalignment varies), ``force_overlay`` (PNG; ``--formats png pdf`` for PDF too);
