@@ -27,6 +27,7 @@ from compliant_docking.config.enums import (
     FrictionComp,
     Integrator,
     NullSpaceMetric,
+    Precision,
     SE3Formulation,
 )
 from compliant_docking.config.geometry import (
@@ -408,6 +409,18 @@ class RenderConfig:
     crf: int = integers(0, 51)  # H.264 constant rate factor: 0 lossless … 51 worst
 
 
+# --------------------------------------------------------------------------- output
+@dataclass
+class OutputConfig:
+    """What a run writes beside its metrics (docs/run_directory.md, "Output size"): the
+    metrics, gate and figures are computed from the full-precision series in memory,
+    whatever is saved."""
+
+    timeseries: bool = MISSING  # false: metrics only, no timeseries.parquet
+    precision: Precision = MISSING  # float32: the saved series' floats in single precision
+    every: int = integers(1, 1_000_000)  # save every N-th control step (1: every step)
+
+
 # --------------------------------------------------------------------------- top level
 @dataclass
 class Config:
@@ -423,3 +436,4 @@ class Config:
     # per-run figures (figures/): null = a single run draws them, a sweep job does not;
     # true / false: always / never (`python -m compliant_docking.report PATH --runs` draws them later)
     figures: Optional[bool] = MISSING
+    output: OutputConfig = MISSING  # what the run saves beside its metrics

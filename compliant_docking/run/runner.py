@@ -261,7 +261,10 @@ def evaluate(sim, out_dir: Path | None, *, figures: bool) -> dict:
 
     if out_dir is None:
         return result
-    rundir.write_timeseries(out_dir, ts)
+    saved = rundir.saved_timeseries(ts, cfg.output)
+    result["timeseries_rows"] = None if saved is None else len(saved)
+    if saved is not None:
+        rundir.write_timeseries(out_dir, saved)
     if figures:
         run_figures.draw(
             out_dir,
