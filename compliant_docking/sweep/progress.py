@@ -82,11 +82,11 @@ def started_at(sweep_dir: Path) -> float | None:
 
 def time_left(started: float | None, done: int | None, total: int | None, now: float | None = None) -> str:
     """``about 1 min 20 s left`` at the sweep's pace so far (its wall time per finished job
-    times the jobs still to finish); "" when unknown or finished."""
+    times the jobs still to finish); "" when unknown, finished or under a second."""
     if started is None or not done or not total or done >= total:
         return ""
-    elapsed = (time.time() if now is None else now) - started
-    return f"about {duration_text(elapsed / done * (total - done))} left" if elapsed > 0 else ""
+    left = ((time.time() if now is None else now) - started) / done * (total - done)
+    return f"about {duration_text(left)} left" if left >= 0.5 else ""  # "about 0 s" says nothing
 
 
 def remove_count(sweep_dir: Path) -> None:

@@ -89,7 +89,8 @@ def test_the_command_writes_beside_the_sweep_and_the_docs_only_when_asked(tmp_pa
     )
     assert main([str(sweep)]) == 0
     assert written == {sweep / "findings.md": "# the finding\n"}
-    assert main([str(sweep), "--out", str(tmp_path / "mine.md")]) == 0 and tmp_path / "mine.md" in written
+    mine = tmp_path / "mine" / "findings.md"
+    assert main([str(sweep), "--out", str(mine)]) == 0 and mine in written
     capsys.readouterr()
     assert main([str(sweep), "--out", "-"]) == 0 and capsys.readouterr().out == "# the finding\n\n"
     assert main([str(sweep), "--docs"]) == 0
