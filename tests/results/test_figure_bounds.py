@@ -82,17 +82,22 @@ def test_a_long_note_is_shrunk_to_the_figures_width():
         plt.close(fig)
 
 
-@pytest.mark.parametrize(("draw", "budget"), MATRIX)
-def test_the_comparison_figures_fit_in_their_frame(draw, budget, tmp_path):
+def fits(fig) -> None:
+    """``fig`` (None: nothing to draw at this budget, e.g. one job has no spread to map)
+    lies inside its frame; closed."""
     import matplotlib.pyplot as plt
 
-    fig = draw(runs(tmp_path, **BUDGETS[budget]))
-    if fig is None:  # nothing to draw at this budget (e.g. one job has no spread to map)
-        return
-    try:
-        assert outside(fig) == []
-    finally:
-        plt.close(fig)
+    if fig is not None:
+        try:
+            assert outside(fig) == []
+        finally:
+            plt.close(fig)
+
+
+@pytest.mark.parametrize(("draw", "budget"), MATRIX)
+def test_the_comparison_figures_fit_in_their_frame(draw, budget, tmp_path):
+
+    fits(draw(runs(tmp_path, **BUDGETS[budget])))
 
 
 @pytest.mark.parametrize(
@@ -101,16 +106,9 @@ def test_the_comparison_figures_fit_in_their_frame(draw, budget, tmp_path):
 def test_the_single_panel_misalignment_figure_fits(budget, tmp_path):
     """One misalignment component varies (misalignment_keyed: the yaw): one panel, on which
     the title, the legend and the note were clipped."""
-    import matplotlib.pyplot as plt
 
     df = runs(tmp_path, **BUDGETS[budget]).assign(misalignment_lateral_m=0.0, misalignment_tilt_deg=0.0)
-    fig = success_vs_misalignment(df)
-    if fig is None:  # nothing to draw at this budget (e.g. one job has no spread to map)
-        return
-    try:
-        assert outside(fig) == []
-    finally:
-        plt.close(fig)
+    fits(success_vs_misalignment(df))
 
 
 # --------------------------------------------------------------------------- tuning figures
