@@ -1,12 +1,13 @@
 """Every command the README prints works as printed.
 
 The commands are read from the README's ``bash`` and ``python`` code blocks (a line ending
-in ``\\`` continues on the next; ``# …`` is a comment). In the default suite each is checked
-as far as it can be in well under a second: a ``compliant-docking`` command's every
-configuration composes and passes the checks a run makes before it starts (its sweep
-expanded: each value of each swept key), a ``make`` target exists (``make -n``), a
-``python -m`` module and a script exist, the Python blocks' names import. The ``slow`` test runs them, shortened by overrides (a run of 0.3 s
-simulated, sweeps of two jobs), into a temporary directory.
+in ``\\`` continues on the next; ``# …`` is a comment). The default suite checks each in
+well under a second: every command is of a kind checked here; a ``compliant-docking``
+command's group options, keys, launchers and sweepers exist; a ``make`` target exists
+(``make -n``); a ``python -m`` module and a script exist; the names the Python blocks import
+are defined. The ``slow`` tests compose and check each command's first job as a run checks
+it before it starts, and run the commands shortened by overrides (0.3 s of stroke) into a
+temporary directory.
 """
 
 from __future__ import annotations
@@ -222,8 +223,10 @@ def test_the_python_blocks_import_what_they_use():
 # --------------------------------------------------------------------------- run as printed
 @pytest.mark.slow
 def test_the_readme_commands_run_as_printed_shortened(tmp_path):
-    """The ``compliant-docking`` commands (each sweep: its first two jobs' worth), the
-    Python blocks on the sweep they made, and the report and findings commands on it."""
+    """The ``compliant-docking`` commands, each run shortened (0.3 s of stroke), the
+    Python blocks on a sweep they made, and the report command on it. The presets' sweeps
+    (tens to hundreds of jobs, their own tests in tests/sweep and tests/tune) are composed
+    and checked above, not run here."""
     ran = []
     for command in commands():
         argv = cli_argv(command)
@@ -232,6 +235,7 @@ def test_the_readme_commands_run_as_printed_shortened(tmp_path):
         if (
             any("submitit_slurm" in a or "MLFLOW" in command or "interval(" in a for a in argv)
             or "resume=" in command
+            or ("-m" in argv and any(a.startswith("+experiment=") for a in argv))
         ):
             continue  # a cluster, a server, a search space: tests/sweep, tests/tracking, tests/tune
         swept = "-m" in argv
@@ -244,7 +248,7 @@ def test_the_readme_commands_run_as_printed_shortened(tmp_path):
         )  # fmt: skip
         assert result.returncode in (0, 3), (command, result.stderr[-2000:])
         ran.append(command)
-    assert len(ran) >= 10
+    assert len(ran) >= 8
     sweep = next(p for p in sorted(tmp_path.iterdir()) if (p / "summary.csv").is_file())
     for block in blocks("python"):
         if "load_runs" in block:
