@@ -47,10 +47,10 @@ class RunProgress:
             self.bar = tqdm(
                 total=round(n_steps * dt, 1),
                 unit="s",
-                desc="  simulating",
+                desc="starting",  # then the real-time factor and the time left
                 leave=False,
                 file=sys.stderr,
-                bar_format="{desc} {n:.1f}/{total:.1f} s |{bar}| {postfix} · {remaining} left",
+                bar_format="  simulating {n:.1f}/{total:.1f} s |{bar}| {desc}",
             )
 
     def update(self, k: int) -> None:
@@ -58,8 +58,8 @@ class RunProgress:
             return
         if self.bar is not None:
             if k % self.every == 0 and k:
-                elapsed = time.perf_counter() - self.start
-                self.bar.set_postfix_str(f"{k * self.dt / max(elapsed, 1e-9):.1f}× real time", refresh=False)
+                line = self.line(k, time.perf_counter() - self.start)
+                self.bar.set_description_str(line.split(" · ", 1)[1], refresh=False)  # rate, time left
                 self.bar.update(round(k * self.dt, 1) - self.bar.n)
         elif self.marks and k >= self.marks[0]:
             while self.marks and k >= self.marks[0]:
@@ -71,7 +71,11 @@ class RunProgress:
         """The plain progress line after step ``k``, ``elapsed`` wall seconds in."""
         done, total = k * self.dt, self.n_steps * self.dt
         rate = done / max(elapsed, 1e-9)
-        left = f"about {duration_text((total - done) / rate)} left" if rate > 0 else "time left unknown"
+        if rate <= 0:
+            left = "time left unknown"
+        else:
+            seconds = (total - done) / rate
+            left = f"about {duration_text(seconds)} left" if seconds >= 0.5 else "under a second left"
         return (
             f"  simulated {done:.1f} / {total:.1f} s ({100 * k / self.n_steps:.0f} %) · "
             f"{rate:.1f}× real time · {left}"
