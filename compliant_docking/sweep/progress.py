@@ -35,7 +35,7 @@ VERBOSE_OVERRIDE = "hydra.hydra_logging.handlers.console.filters=[]"
 
 
 class LaunchLines(logging.Filter):
-    """Leaves out the launchers' per-job launch lines (``\t#12 : controller=hqp …``: Hydra's
+    """Leaves out the launchers' per-job launch lines (``\t#<n> : controller=hqp …``: Hydra's
     joblib and submitit launchers and ours log one per job before any job runs), a
     ``logging`` filter named in the Hydra logging config conf/hydra/hydra_logging/console.yaml."""
 
