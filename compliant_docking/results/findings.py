@@ -10,9 +10,9 @@ research code reported 27.2 N → 5.2 N (−81 %) on its own interface.
 writes the finding next to the sweep (``SWEEP_DIR/findings.md``; ``--out FILE`` elsewhere,
 ``--out -`` prints it); ``--docs`` rewrites the tracked docs/findings.md of the checkout,
 which only a deliberate update of the docs should do (a tracked file changed flips
-``git_dirty`` in the provenance of every later run). It reads the sweep with :func:`~compliant_docking.results.load.load_runs`, keeps the jobs of
-one robot (``--robot``, fr3) and two controllers (``--baseline`` impedance, ``--candidate``
-hqp), pairs the jobs that docked into the same socket (the same planner and the same draw:
+``git_dirty`` in the provenance of every later run). It reads the sweep with
+:func:`~compliant_docking.results.load.load_runs`, keeps the jobs of one robot (``--robot``,
+fr3) and two controllers (``--baseline`` impedance, ``--candidate`` hqp), pairs the jobs that docked into the same socket (the same planner and the same draw:
 the draws are common random numbers), and writes the finding as Markdown:
 
 - per force metric (first strike, peak axial): the medians, the median of the paired
