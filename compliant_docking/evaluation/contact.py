@@ -27,6 +27,14 @@ def first_contact_index(contacts: np.ndarray) -> int | None:
     return int(touching[0]) if touching.size else None
 
 
+def first_contact_state(contacts: np.ndarray) -> int | None:
+    """Row of the first state in which MuJoCo found the plug touching: the row before the
+    first with contacts > 0 (its contacts come from the step taken from that state), row 0
+    when that is the first; None without contact. ``first_contact_time_s`` is its time."""
+    first = first_contact_index(contacts)
+    return None if first is None else max(first - 1, 0)
+
+
 def strike_end(contacts: np.ndarray, start: int, max_rows: int) -> int:
     """End (exclusive) of the first strike starting at row ``start``: the first row without
     contact after it, or ``start + max_rows``, or the end of the series, whichever is first."""
@@ -77,12 +85,11 @@ def contact_metrics(
         # transitions between the window's rows, over the time those rows span
         steady_contact_events_per_s=make_break_events(contacts[steady]) / span if span > 0 else None,
     )
-    first = first_contact_index(contacts)
-    if first is not None:
+    state = first_contact_state(contacts)
+    if state is not None:
         insertion = -seat.rotation[:, 2]  # into the socket
         axial = -(force @ insertion)
         max_rows = max(int(round(strike_window / dt)), 1) if dt > 0 else 1
-        state = max(first - 1, 0)  # the state whose physics step found the contact
         rel = (ts[POSITION].to_numpy()[state] - seat.translation) @ seat.rotation
         velocity = ts[TWIST[:3]].to_numpy()[state]
         values.update(

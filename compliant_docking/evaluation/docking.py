@@ -22,7 +22,7 @@ import numpy as np
 import pandas as pd
 import pinocchio as pin
 
-from compliant_docking.evaluation.contact import ContactMetrics
+from compliant_docking.evaluation.contact import ContactMetrics, first_contact_state
 from compliant_docking.evaluation.registry import DOCKING_KEYS, finite_or_none
 from compliant_docking.sim.geometry.fragment import ROUND, Key
 from compliant_docking.sim.telemetry import (
@@ -84,6 +84,7 @@ def compute_metrics(
     pos_err = ts[POSITION].to_numpy() - ts[POSITION_REF].to_numpy()
     lateral = pos_err - np.outer(pos_err @ axis, axis)
     ori_norm = np.linalg.norm(ts[ORI_ERROR].to_numpy(), axis=1)
+    approach = approach_rows(ts)
 
     values = dict(
         peak_axial_force_N=np.max(np.abs(axial)),
@@ -96,6 +97,9 @@ def compute_metrics(
         min_manipulability=None if manipulability is None else np.min(manipulability),
         pos_tracking_rms_m=np.sqrt(np.mean(ts["pos_error"].to_numpy() ** 2)),
         ori_tracking_rms_rad=np.sqrt(np.mean(ori_norm**2)),
+        approach_pos_rms_m=_rms(ts["pos_error"].to_numpy()[approach]),
+        approach_ori_rms_rad=_rms(ori_norm[approach]),
+        press_depth_m=-np.mean((pos_err @ axis)[steady]),
         final_lateral_error_m=np.mean(np.linalg.norm(lateral, axis=1)[steady]),
         final_orientation_error_rad=np.mean(ori_norm[steady]),
         max_joint_pos_joint=pos_joint,
@@ -103,6 +107,20 @@ def compute_metrics(
     )
     assert set(values) == set(DOCKING_KEYS), "compute_metrics and the registry disagree"
     return {k: finite_or_none(values[k]) for k in DOCKING_KEYS}
+
+
+def approach_rows(ts: pd.DataFrame) -> np.ndarray:
+    """The rows of the motion before the plug first touched anything: those before the first
+    contact's state (``first_contact_time_s``, :func:`~compliant_docking.evaluation.contact.first_contact_state`),
+    every row when nothing touched (free space, or no ``contacts`` column)."""
+    n = len(ts)
+    state = first_contact_state(ts["contacts"].to_numpy()) if "contacts" in ts else None
+    return np.arange(n) < (n if state is None else state)
+
+
+def _rms(values: np.ndarray) -> float | None:
+    """Root mean square; None for no values."""
+    return float(np.sqrt(np.mean(values**2))) if values.size else None
 
 
 def filtered_peak(force: np.ndarray, t: np.ndarray, window: float) -> float:
@@ -161,6 +179,8 @@ class SeatState:
     tilt_deg: float | None  # angle between plug axis and socket axis
     seated_time_s: float | None  # first time the tip came within depth tolerance of the seat
     key_yaw_deg: float | None = None  # roll error against the socket's key (None: round interface)
+    docking_time_s: float | None = None  # :func:`docking_row`'s time (None: never docked)
+    docking_time_after_contact_s: float | None = None  # the same, from the first contact
 
 
 #: added to a key's yaw play to make the default key-yaw tolerance of the gate [deg]
@@ -168,10 +188,17 @@ KEY_YAW_MARGIN_DEG = 0.1
 
 
 def seat_state(
-    ts: pd.DataFrame, seat: pin.SE3, steady_window: float, depth_tolerance: float, key: Key = ROUND
+    ts: pd.DataFrame,
+    seat: pin.SE3,
+    steady_window: float,
+    depth_tolerance: float,
+    key: Key = ROUND,
+    lateral_tolerance: float | None = None,
 ) -> SeatState:
     """Where the plug ended up, measured on the physics' (true) socket pose; for a keyed
-    interface also the roll error against the socket's key (:meth:`Key.yaw_error_deg`)."""
+    interface also the roll error against the socket's key (:meth:`Key.yaw_error_deg`);
+    with ``lateral_tolerance`` (and a ``contacts`` column) the docking time
+    (:func:`docking_row`)."""
     if ts.empty:
         return SeatState(None, None, None, None)
     t = ts["t"].to_numpy()
@@ -185,13 +212,38 @@ def seat_state(
     depth = np.abs(rel[:, 2])
     lateral = np.linalg.norm(rel[:, :2], axis=1)
     seated = np.flatnonzero(depth <= depth_tolerance)
+    docked = None
+    if lateral_tolerance is not None and "contacts" in ts:
+        contact = first_contact_state(ts["contacts"].to_numpy())
+        inside = (depth <= depth_tolerance) & (lateral <= lateral_tolerance)
+        docked = docking_row(inside, contact)
     return SeatState(
         depth_error_m=finite_or_none(depth[steady].max()),
         lateral_error_m=finite_or_none(lateral[steady].max()),
         tilt_deg=finite_or_none(tilt[steady].max()),
         seated_time_s=float(t[seated[0]]) if seated.size else None,
         key_yaw_deg=_key_yaw(quat[steady], seat.rotation, key),
+        docking_time_s=None if docked is None else float(t[docked]),
+        docking_time_after_contact_s=None if docked is None else float(t[docked] - t[contact]),
     )
+
+
+def docking_row(seated: np.ndarray, first_contact: int | None) -> int | None:
+    """The row at which the plug docked: the first row, at or after the first contact's
+    state row, from which it is ``seated`` on every row to the end of the series. None
+    when it never touched or is not seated on the last row.
+
+    Why these parts: from the first contact, because a plug that has touched nothing rests
+    on nothing (a plug carried to the seat without touching is the planner's arrival, not a
+    docking); to the end, because a plug that leaves the seat again had not docked when it
+    first got there.
+    """
+    seated = np.asarray(seated, dtype=bool)
+    if first_contact is None or not seated.size or not seated[-1]:
+        return None
+    outside = np.flatnonzero(~seated)
+    stays_from = int(outside[-1]) + 1 if outside.size else 0
+    return max(stays_from, first_contact)
 
 
 def _key_yaw(quat_wxyz: np.ndarray, seat: np.ndarray, key: Key) -> float | None:

@@ -103,9 +103,16 @@ METRICS: tuple[Metric, ...] = (
         "max_joint_vel_pct", INTERNAL, "max joint speed use", "%", spec=".1f", joint_key="max_joint_vel_joint"
     ),
     Metric("min_manipulability", INTERNAL, "min manipulability", "", spec=".4g"),
-    # tracking accuracy (Ren & Shan 2026, Table 10)
-    Metric("pos_tracking_rms_m", TRACKING, "position RMS", "mm", 1e3),
-    Metric("ori_tracking_rms_rad", TRACKING, "orientation RMS", "deg", DEG_PER_RAD),
+    # tracking accuracy (Ren & Shan 2026, Table 10: over the whole run, so a docking run's RMS is mostly the
+    # intentional press of the reference past the seat); the motion before the first
+    # contact and the press apart, under names that say so
+    Metric("pos_tracking_rms_m", TRACKING, "position RMS, whole run", "mm", 1e3),
+    Metric("ori_tracking_rms_rad", TRACKING, "orientation RMS, whole run", "deg", DEG_PER_RAD),
+    Metric("approach_pos_rms_m", TRACKING, "position RMS before contact", "mm", 1e3, spec=".4f"),
+    Metric(
+        "approach_ori_rms_rad", TRACKING, "orientation RMS before contact", "deg", DEG_PER_RAD, spec=".4f"
+    ),
+    Metric("press_depth_m", TRACKING, "press depth", "mm", 1e3),
     Metric("final_lateral_error_m", TRACKING, "final lateral error", "mm", 1e3),
     Metric("final_orientation_error_rad", TRACKING, "final orientation error", "deg", DEG_PER_RAD),
     # where the plug ended up, on the true socket pose (docking runs)
@@ -113,8 +120,23 @@ METRICS: tuple[Metric, ...] = (
     Metric("seat_lateral_error_m", SEAT, "lateral error", "mm", 1e3, interval=True),
     Metric("seat_tilt_deg", SEAT, "tilt", "deg", interval=True),
     Metric("seat_key_yaw_deg", SEAT, "key yaw", "deg"),  # keyed interfaces only (else null)
-    # docking time: the first time the tip is within the depth tolerance of the true seat
-    Metric("seated_time_s", SEAT, "docking time (seated at)", "s", spec=".2f", compared=False, interval=True),
+    # docking time: from the first contact on, the first time the tip is within the gate's
+    # depth and lateral tolerances of the true seat and stays there to the end of the run
+    Metric(
+        "docking_time_s", SEAT, "docking time (docked at)", "s", spec=".2f", compared=False, interval=True
+    ),
+    Metric(
+        "docking_time_after_contact_s",
+        SEAT,
+        "docking time after contact",
+        "s",
+        spec=".2f",
+        compared=False,
+        interval=True,
+    ),
+    # kept for older readers: the first time the tip came within the depth tolerance, even
+    # before touching anything (the planner's arrival) and even if it left again
+    Metric("seated_time_s", SEAT, "within depth tolerance at", "s", spec=".2f", compared=False),
     # the run
     Metric("sim_time_s", RUN, "simulated", "s", spec=".2f", compared=False),
     Metric("real_time_factor", RUN, "loop speed", "× real time", spec=".1f"),
@@ -122,7 +144,8 @@ METRICS: tuple[Metric, ...] = (
 )
 
 BY_KEY: dict[str, Metric] = {m.key: m for m in METRICS}
-#: the research code's docking metrics (DockingMetrics) and the joint of each per-joint maximum
+#: the research code's docking metrics (DockingMetrics; with the tracking before contact and
+#: the press depth, computed with them) and the joint of each per-joint maximum
 TABLE10_KEYS: tuple[str, ...] = tuple(m.key for m in METRICS if m.section in (CONTACT, INTERNAL, TRACKING))
 DOCKING_KEYS: tuple[str, ...] = TABLE10_KEYS + tuple(
     m.joint_key for m in METRICS if m.section in (CONTACT, INTERNAL, TRACKING) and m.joint_key

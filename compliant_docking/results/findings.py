@@ -22,7 +22,7 @@ the draws are common random numbers), and writes the finding as Markdown:
   and per planner, and split by the sign of the drawn x offset (which side of the bore the
   plug strikes);
 - the cost: success rate of each with its Wilson interval and McNemar's exact test on the
-  pairs; docking time (``seated_time_s``) paired on the draws both seated;
+  pairs; docking time (``docking_time_s``) paired on the draws both docked in place;
 - the verdict in words, and whether the reported −81 % lies inside the interval;
 - the sweep's git commit(s), command line and the command that wrote the file.
 """
@@ -110,20 +110,20 @@ def _force_table(rows: list[dict]) -> str:
 
 
 def cost_rows(merged: pd.DataFrame, seed: int = stats.SEED) -> tuple[list[list[str]], dict]:
-    """Success (Wilson, McNemar) and docking time (paired on the draws both seated)."""
+    """Success (Wilson, McNemar) and docking time (paired on the draws with a docking time in both)."""
     docked_a = (merged["success_a"] == True).to_numpy()  # noqa: E712
     docked_b = (merged["success_b"] == True).to_numpy()  # noqa: E712
     n = len(merged)
     only_a, only_b, p_success = stats.mcnemar(docked_a, docked_b)
     wa, wb = stats.wilson(int(docked_a.sum()), n), stats.wilson(int(docked_b.sum()), n)
-    time = stats.paired(_measured(merged, "seated_time_s", "a"), _measured(merged, "seated_time_s", "b"),
-                        "findings|seated_time_s", seed=seed)  # fmt: skip
+    time = stats.paired(_measured(merged, "docking_time_s", "a"), _measured(merged, "docking_time_s", "b"),
+                        "findings|docking_time_s", seed=seed)  # fmt: skip
     rate = lambda k, w: f"{100 * k / n:.0f} % [{100 * w[0]:.0f}, {100 * w[1]:.0f}] ({k}/{n})"  # noqa: E731
     body = [
         ["success rate [Wilson 95 % CI]", rate(int(docked_a.sum()), wa), rate(int(docked_b.sum()), wb),
          f"{100 * (docked_b.mean() - docked_a.mean()):+.0f} %-points ({only_a} draws only a docked, "
          f"{only_b} only b)", _num(p_success, 2), "McNemar exact"],
-        ["docking time (seated at) [s], draws both seated", _num(time.median_a, 4), _num(time.median_b, 4),
+        ["docking time (docked at) [s], draws docked in both", _num(time.median_a, 4), _num(time.median_b, 4),
          _ci(time.median_difference, time.difference_low, time.difference_high, "s") + f" ({time.n} pairs)",
          _num(time.p_value, 2), "Wilcoxon signed-rank"],
     ]  # fmt: skip
@@ -224,7 +224,7 @@ def findings_markdown(
         f"- **Cost in success**: {100 * rate_a:.0f} % docked with {baseline}, {100 * rate_b:.0f} % with "
         f"{candidate} ({only_a} draws only {baseline} docked, {only_b} only {candidate}; McNemar p = "
         f"{_num(p_success, 2)}).",
-        f"- **Cost in docking time** (draws both seated, {time.n}): median of the paired differences "
+        f"- **Cost in docking time** (draws docked in both, {time.n}): median of the paired differences "
         f"{_ci(time.median_difference, time.difference_low, time.difference_high, 's')}, p = {_num(time.p_value, 2)}.",
         "",
         "## Design",

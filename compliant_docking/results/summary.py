@@ -270,8 +270,9 @@ def summary_markdown(
                 "## Statistics per configuration",
                 "",
                 "Over the finished jobs of each configuration that have the value; 95 % intervals: "
-                f"seeded percentile bootstrap ({RESAMPLES} resamples); docking time = the first time "
-                "the plug tip is within the depth tolerance of the true seat (seated_time_s).",
+                f"seeded percentile bootstrap ({RESAMPLES} resamples); docking time = from the first "
+                "contact on, the first time the plug tip is within the gate's depth and lateral "
+                "tolerances of the true seat and stays there to the end (docking_time_s).",
                 "",
                 statistics,
                 "",

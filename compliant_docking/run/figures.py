@@ -28,7 +28,7 @@ def wanted(cfg: Any, *, sweep: bool) -> bool:
 def marks(cfg: Any, record: dict) -> Any:
     """What the figures mark (:class:`compliant_docking.viz.plotting.RunMarks`) from the run's
     config (plain data or DictConfig) and its metrics record: the force budget and the
-    seated time of a docking run; free space (no target); the segments and thresholds of
+    docking time of a docking run; free space (no target); the segments and thresholds of
     the tracking test."""
     from compliant_docking.planning.tracking import segment_times
     from compliant_docking.viz.plotting import RunMarks
@@ -54,10 +54,10 @@ def marks(cfg: Any, record: dict) -> Any:
         except (KeyError, TypeError, ValueError):
             segments = ()
     budget = (task.get("gate") or {}).get("peak_force_budget_N")
-    seated = record.get("seated_time_s")
+    docked = record.get("docking_time_s")
     return RunMarks(
         budget=None if free_space or budget is None else float(budget),
-        seated_time=None if seated is None else float(seated),
+        docking_time=None if docked is None else float(docked),
         free_space=free_space,
         segments=segments,
         thresholds=thresholds,

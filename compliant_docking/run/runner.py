@@ -223,6 +223,7 @@ def evaluate(sim, out_dir: Path | None, *, figures: bool) -> dict:
             float(cfg.task.steady_window),
             float(cfg.task.gate.depth_tolerance_m),
             key,
+            lateral_tolerance=float(cfg.task.gate.lateral_tolerance_m),
         )
         result.update(
             seat_depth_error_m=seat.depth_error_m,
@@ -230,6 +231,8 @@ def evaluate(sim, out_dir: Path | None, *, figures: bool) -> dict:
             seat_tilt_deg=seat.tilt_deg,
             seat_key_yaw_deg=seat.key_yaw_deg,
             seated_time_s=seat.seated_time_s,
+            docking_time_s=seat.docking_time_s,
+            docking_time_after_contact_s=seat.docking_time_after_contact_s,
             key_symmetry=key.symmetry,
             key_yaw_play_deg=key.yaw_play_deg,
         )

@@ -174,14 +174,14 @@ def first_contact_time(ts: pd.DataFrame) -> float | None:
 class RunMarks:
     """What a run's figures mark beyond its time series (all optional).
 
-    ``budget``: the docking gate's peak force budget [N]; ``seated_time``: when the plug
-    was first seated [s]; ``free_space``: no target (no contact-force figure);
+    ``budget``: the docking gate's peak force budget [N]; ``docking_time``: when the plug
+    docked (``docking_time_s``) [s]; ``free_space``: no target (no contact-force figure);
     ``segments``: the planner's ``(name, t0, t1)``; ``thresholds``: the tracking gate's
     (``task.tracking_gate``: ``circle_position_rms_m``, …), drawn for the tracking test.
     """
 
     budget: float | None = None
-    seated_time: float | None = None
+    docking_time: float | None = None
     free_space: bool = False
     segments: tuple[tuple[str, float, float], ...] = ()
     thresholds: dict = field(default_factory=dict)
@@ -320,7 +320,7 @@ def _contact_figure(plt, ts: pd.DataFrame, axis, marks: RunMarks, finish) -> Non
     lateral = np.linalg.norm(force + np.outer(axial, axis), axis=1)
     moment = np.linalg.norm(ts[MOMENT].to_numpy(), axis=1)
     contact = first_contact_time(ts)
-    events = [v for v in (contact, marks.seated_time) if v is not None]
+    events = [v for v in (contact, marks.docking_time) if v is not None]
     start = max(t[0], min(events) - BEFORE_CONTACT) if events else t[0]
     window = t >= start
     fig, axes = panels(plt, 2, panel_height=1.25)
@@ -341,9 +341,9 @@ def _contact_figure(plt, ts: pd.DataFrame, axis, marks: RunMarks, finish) -> Non
     for a in axes[:, 0]:
         if contact is not None:
             a.axvline(contact, color="0.5", lw=0.6, ls=":")
-        if marks.seated_time is not None:
-            a.axvline(marks.seated_time, color="C2", lw=0.8, ls="-.")
-    for when, text, color in ((contact, "first contact", "0.4"), (marks.seated_time, "seated", "C2")):
+        if marks.docking_time is not None:
+            a.axvline(marks.docking_time, color="C2", lw=0.8, ls="-.")
+    for when, text, color in ((contact, "first contact", "0.4"), (marks.docking_time, "docked", "C2")):
         if when is not None:
             axes[1, 0].annotate(text, (when, 0.97), xycoords=("data", "axes fraction"), xytext=(2, 0),
                                 textcoords="offset points", fontsize=7, color=color, rotation=90,

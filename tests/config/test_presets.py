@@ -72,3 +72,31 @@ def test_every_controller_robot_and_planner_docks_into_the_same_sockets():
         assert len(poses) == 1, poses
         [pose] = poses
         assert pose == draw({**preset("controller_comparison")[1], "seed": seed})
+
+
+def test_the_jamming_map_tiles_its_plane_with_enough_draws_per_cell():
+    """The cells tile x ∈ [−6, 6] mm × tilt ∈ [0, 5]° edge to edge; every Wilson 95 %
+    interval of N draws is at most ±10 % whatever the count docked; each job's draw lies in
+    its cell, in the plane (y = 0, the tilt leaning towards +x: yaw 90°)."""
+    from compliant_docking.results.stats import wilson
+
+    params, settings = preset("jamming_map")
+    assert set(params["robot"].split(",")) == {"iiwa14", "fr3"}
+    assert set(params["controller"].split(",")) == {"impedance", "hqp", "se3_lie"}
+    cells = {}
+    for key, span in (
+        ("task.misalignment.x_range", (-0.006, 0.006)),
+        ("task.misalignment.tilt_deg_range", (0, 5)),
+    ):
+        bounds = yaml.safe_load("[" + params[key] + "]")
+        assert bounds[0][0] == span[0] and bounds[-1][1] == span[1]
+        assert all(a[1] == b[0] for a, b in zip(bounds, bounds[1:]))  # no gap, no overlap
+        cells[key] = bounds
+    n = draws_of(params)
+    assert max((hi - lo) / 2 for lo, hi in (wilson(k, n) for k in range(n + 1))) <= 0.10
+    assert max((hi - lo) / 2 for lo, hi in (wilson(k, n - 1) for k in range(n))) > 0.10  # N is the least
+    assert (settings["y"], settings["yaw_deg"]) == (0.0, 90.0)
+    for x_range in (cells["task.misalignment.x_range"][0], cells["task.misalignment.x_range"][-1]):
+        for seed in (0, n - 1):
+            d = draw({**settings, "x_range": x_range, "tilt_deg_range": [4.0, 5.0], "seed": seed})
+            assert x_range[0] <= d.x <= x_range[1] and 4.0 <= d.tilt_deg <= 5.0 and d.y == 0.0

@@ -196,6 +196,7 @@ def test_misspelled_keys_added_with_plus_are_refused_with_the_nearest_keys(overr
         ("+experiment=clearance",),
         ("+experiment=misalignment",),
         ("+experiment=misalignment_keyed",),
+        ("+experiment=jamming_map",),
         ("+experiment=tracking_gate", "robot=fr3"),
         ("physics=earth", "controller=hqp", "robot=fr3"),
         ("render=video",),

@@ -60,7 +60,10 @@ def synthetic_run() -> pd.DataFrame:
       4 mm), then 4 mm along the axis plus 3 mm along PERP (5 mm, lateral 3 mm): over the
       run RMS 5 mm, mean 4.5 mm;
     - orientation error: 0, then from t = 2 s to 5 s alternately 0.1 and 0.7 rad, then 0:
-      RMS √0.075 rad, mean 0.12 rad, 0 in the steady window.
+      RMS √0.075 rad, mean 0.12 rad, 0 in the steady window;
+    - contacts from row 301 on: the first contact's state is row 300 (t = 3 s), so the
+      motion before contact is rows 0–299 (position RMS 5 mm, orientation RMS √(1/12) rad:
+      100 of its 300 rows alternate 0.1 and 0.7 rad).
     """
     t = np.arange(N) * DT
     k = np.arange(N)
@@ -95,6 +98,7 @@ def synthetic_run() -> pd.DataFrame:
     for block, names in ((ref + err, POSITION), (ref, POSITION_REF), (force, FORCE), (moment, MOMENT)):
         cols.update({name: block[:, i] for i, name in enumerate(names)})
     cols["pos_error"] = err_norm
+    cols["contacts"] = np.where(k >= 301, 2, 0)
     cols.update({name: ori[:, i] for i, name in enumerate(ORI_ERROR)})
     return pd.DataFrame(cols)
 
@@ -131,6 +135,9 @@ EXPECTED = {
     "min_manipulability": 0.03,
     "pos_tracking_rms_m": 5e-3,  # the mean would be 4.5 mm
     "ori_tracking_rms_rad": math.sqrt(0.075),  # the mean would be 0.12 rad
+    "approach_pos_rms_m": 5e-3,  # rows 0–299 (the mean would be 4 mm)
+    "approach_ori_rms_rad": math.sqrt(1.0 / 12.0),  # rows 0–299; through row 300: √(25.01/301)
+    "press_depth_m": -4e-3,  # the tip 4 mm PAST the reference along the axis (the 3 mm across: not counted)
     "final_lateral_error_m": 3e-3,  # unprojected: 5 mm; over the run: more
     "final_orientation_error_rad": 0.0,  # over the run: 0.12 rad
 }

@@ -203,7 +203,7 @@ def test_comparison_pools_repeats_and_counts_outcomes(tmp_path):
     assert table.loc[
         ("contact safety", "peak axial force (raw, per step) [N]"), "impedance"
     ] == pytest.approx(140.0 / 3)
-    assert table.loc[("tracking accuracy", "position RMS [mm]"), "impedance"] == pytest.approx(1.0)
+    assert table.loc[("tracking accuracy", "position RMS, whole run [mm]"), "impedance"] == pytest.approx(1.0)
     assert (
         table.loc[("success", "jobs"), "impedance"] == 4
         and table.loc[("success", "failed"), "impedance"] == 1

@@ -17,7 +17,7 @@ OBJECTIVE = OmegaConf.create(
         "name": "mean_force",
         "metric": "first_strike_force_N",
         "fallback_metric": "peak_axial_force_N",
-        "time_metric": "seated_time_s",
+        "time_metric": "docking_time_s",
         "require_docking": True,
         "penalty": 1000.0,
     }
@@ -93,7 +93,7 @@ def record(success=True, force=10.0, time=14.0, status="ok", **extra) -> dict:
         "error": "simulation diverged" if status == "failed" else None,
         "gate_failures": None if success else "peak axial force 61 N > 50 N",
         "peak_axial_force_N": force,
-        "seated_time_s": time,
+        "docking_time_s": time,
         **extra,
     }
 
@@ -128,7 +128,7 @@ def test_a_trial_whose_draws_all_dock_scores_their_mean():
     assert result.attrs["docked"] == 3 and result.attrs["force_per_draw"] == [10.0, 20.0, 33.0]
     worst = evaluate(objectives.get("worst_force"), draws, keys, OBJECTIVE)
     assert worst.values == (33.0,)
-    both = evaluate(objectives.get("force_time"), draws, {**keys, "time": "seated_time_s"}, OBJECTIVE)
+    both = evaluate(objectives.get("force_time"), draws, {**keys, "time": "docking_time_s"}, OBJECTIVE)
     assert both.values == pytest.approx((21.0, 14.0))
 
 

@@ -48,7 +48,7 @@ class RuleLauncher:
                 "gate_failures": None if docked else "seat depth error 2 mm > 1 mm",
                 "first_strike_force_N": 1e4 / k + seed,  # the objective's force
                 "peak_axial_force_N": 1e4 / k + seed,  # its fallback
-                "seated_time_s": 14.0 + seed,
+                "docking_time_s": 14.0 + seed,
             }
             (job_dir / "metrics.json").write_text(json.dumps(record))
         if len(self.batches) - 1 in self.fail_batches:

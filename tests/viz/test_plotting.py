@@ -1,5 +1,5 @@
 """A run's own figures: the contact-force panel zoomed on the contact with the budget and the
-seated time, the tracking test's paths, segments and thresholds without a contact-force
+docking time, the tracking test's paths, segments and thresholds without a contact-force
 figure, and axes without offset notation (the figures are caught as they are saved)."""
 
 from __future__ import annotations
@@ -65,15 +65,15 @@ def run(tmp_path, ts, marks: RunMarks) -> None:
     plot_run(ts, tmp_path, axis=np.array([0.0, 0.0, -1.0]), torque_limits=np.full(7, 10.0), marks=marks)
 
 
-def test_contact_panel_zooms_on_the_contact_with_budget_and_seated_marker(tmp_path, drawn):
-    run(tmp_path, series(contact_at=10.0, peak=30.0), RunMarks(budget=40.0, seated_time=10.4))
+def test_contact_panel_zooms_on_the_contact_with_budget_and_docked_marker(tmp_path, drawn):
+    run(tmp_path, series(contact_at=10.0, peak=30.0), RunMarks(budget=40.0, docking_time=10.4))
     ax = drawn["contact_force"].axes[0]
     assert ax.get_xlim() == pytest.approx((10.0 - 0.3 - 0.001, 12.0 - 0.001), abs=2e-3)  # 0.3 s before
     budget = [line for line in ax.lines if list(line.get_ydata()) == [40.0, 40.0]]
     assert len(budget) == 1 and "budget 40 N" in budget[0].get_label()
     markers = [line.get_xdata()[0] for line in ax.lines if line.get_linestyle() == "-."]
-    assert markers == [pytest.approx(10.4)]  # seated
-    assert {t.get_text() for t in drawn["contact_force"].axes[1].texts} == {"first contact", "seated"}
+    assert markers == [pytest.approx(10.4)]  # docked
+    assert {t.get_text() for t in drawn["contact_force"].axes[1].texts} == {"first contact", "docked"}
 
 
 def test_a_budget_far_above_the_forces_is_named_not_drawn(tmp_path, drawn):
