@@ -1,6 +1,6 @@
 """A run's console progress, with a sense of time: how far, how fast, how long still.
 
-In a terminal (stderr a tty) a tqdm bar over the simulated seconds, updated once per
+In a terminal (stderr a tty) a bar over the simulated seconds, updated once per
 simulated second, with the real-time factor and the time left; it is cleared at the end
 (the summary follows). In a log (stderr redirected, a batch job) plain lines, one at each
 quarter of the run::
@@ -17,6 +17,8 @@ import time
 
 #: the plain lines' marks, as fractions of the run
 LOG_MARKS = (0.25, 0.5, 0.75)
+#: characters of the terminal's bar
+BAR_WIDTH = 30
 
 
 def duration_text(seconds: float) -> str:
@@ -40,27 +42,21 @@ class RunProgress:
         self.tty = sys.stderr.isatty()
         self.start = time.perf_counter()
         self.marks = [m for m in (int(f * n_steps) for f in LOG_MARKS) if m > 0]
-        self.bar = None
-        if enabled and self.tty:
-            from tqdm import tqdm
-
-            self.bar = tqdm(
-                total=round(n_steps * dt, 1),
-                unit="s",
-                desc="starting",  # then the real-time factor and the time left
-                leave=False,
-                file=sys.stderr,
-                bar_format="  simulating {n:.1f}/{total:.1f} s |{bar}| {desc}",
-            )
+        self.bar = enabled and self.tty  # a bar redrawn in place (\r) in a terminal
 
     def update(self, k: int) -> None:
         if not self.enabled:
             return
-        if self.bar is not None:
+        if self.bar:
             if k % self.every == 0 and k:
                 line = self.line(k, time.perf_counter() - self.start)
-                self.bar.set_description_str(line.split(" · ", 1)[1], refresh=False)  # rate, time left
-                self.bar.update(round(k * self.dt, 1) - self.bar.n)
+                filled = int(BAR_WIDTH * k / self.n_steps)
+                rest = line.split(" · ", 1)[1]
+                sys.stderr.write(
+                    f"\r  simulating {k * self.dt:.1f}/{self.n_steps * self.dt:.1f} s "
+                    f"|{'█' * filled}{' ' * (BAR_WIDTH - filled)}| {rest}   "
+                )
+                sys.stderr.flush()
         elif self.marks and k >= self.marks[0]:
             while self.marks and k >= self.marks[0]:
                 self.marks.pop(0)
@@ -82,6 +78,7 @@ class RunProgress:
         )
 
     def done(self) -> None:
-        if self.bar is not None:
-            self.bar.close()
-            self.bar = None
+        if self.bar:
+            sys.stderr.write("\r" + " " * (BAR_WIDTH + 80) + "\r")  # cleared: the summary follows
+            sys.stderr.flush()
+            self.bar = False

@@ -92,7 +92,7 @@ def test_the_hydra_logging_config_names_the_filter_and_verbose_removes_it():
 def test_a_run_in_a_log_prints_plain_lines_with_the_time_left(capsys):
     """stderr not a terminal (a log, a batch job): a line at each quarter of the run."""
     reporter = RunProgress(n_steps=18000, dt=0.001, enabled=True)
-    assert reporter.bar is None
+    assert not reporter.bar
     assert (
         reporter.line(4500, elapsed=1.5)
         == "  simulated 4.5 / 18.0 s (25 %) · 3.0× real time · about 4 s left"
