@@ -14,10 +14,15 @@ is the code's speed, the median what a user sees). It also times the whole comma
     python benchmarks/loop_speed.py                      # all controllers, iiwa14 and fr3
     python benchmarks/loop_speed.py --controllers impedance --robots fr3
     python benchmarks/loop_speed.py --versus sensor=wrist_ft   # the cost of an option
+    python benchmarks/loop_speed.py --check-targets      # exit 1 when a target is missed
 
 ``--versus OVERRIDE…`` also runs every configuration with these overrides, alternating
 with the plain runs in this process, and prints the ratio of the loop's time per step
 (versus / plain; best against best and median against median).
+
+It reports and exits 0 whatever the timings (``make benchmark``): a busy machine runs 2-3×
+slower, so a missed target is a note, not an error; ``--check-targets`` (``make
+benchmark-check``) exits 1 when any target is missed, for a quiet machine.
 
 benchmarks/step_profile.py splits a step's time into its parts (Pinocchio update,
 controller, physics, the loop's own bookkeeping).
@@ -77,11 +82,15 @@ def main() -> int:
     parser.add_argument(
         "--versus", nargs="+", default=None, help="overrides of a second configuration to compare"
     )
+    parser.add_argument(
+        "--check-targets", action="store_true", help="exit with status 1 when any speed target is missed"
+    )
     parser.add_argument("overrides", nargs="*", help="extra Hydra overrides for every run")
     args = parser.parse_args()
     if args.versus:
         return compare(args)
 
+    print(f"machine load (1, 5, 15 min): {_loadavg()}")
     print(
         f"{'robot':8} {'controller':11} {'RTF best':>9} {'RTF median':>11} {'loop µs':>8} "
         f"{'replay µs':>10} {'loop/replay':>12}  target"
@@ -111,7 +120,19 @@ def main() -> int:
             f"\nwhole `python -m compliant_docking` (default run): {wall:.2f} s wall "
             f"(target < {CLI_TARGET_S:g} s: {'met' if wall <= CLI_TARGET_S else 'MISSED'})"
         )
-    return 1 if failures else 0
+    if failures:
+        print(
+            f"\n{failures} target(s) missed. Timings vary 2-3x with the machine's load (above): "
+            "compare ratios measured in one process; --check-targets exits 1 on a miss."
+        )
+    return 1 if failures and args.check_targets else 0
+
+
+def _loadavg() -> str:
+    try:
+        return " ".join(Path("/proc/loadavg").read_text().split()[:3])
+    except OSError:
+        return "unknown"
 
 
 def compare(args) -> int:

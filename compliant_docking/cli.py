@@ -1,11 +1,12 @@
 """The command line: ``compliant-docking [overrides]`` (the console script of
 ``[project.scripts]``, or ``python -m compliant_docking``) — one run, or a sweep with ``-m``.
 
-Exit status: 0 the run succeeded (docked / tracking gate PASS), 1 the run failed
-(error or divergence) or the command was refused before anything ran (a bad key or
-value, a directory that is not new, a resume or tuning study that cannot continue:
-compliant_docking/sweep/guard.py), 3 the run finished but its gate did not pass,
-130 / 143 / 129 stopped by Ctrl-C / SIGTERM / SIGHUP (a single run records status
+Exit status (one table for every command: compliant_docking/exit_codes.py,
+docs/exit_codes.md): 0 the run docked (or passed its tracking gate), 1 the run failed
+(error or divergence), 2 the command was refused before anything ran (a bad key or value,
+a directory that is not new, a resume or tuning study that cannot continue:
+compliant_docking/sweep/guard.py), 3 the run finished but its gate did not pass (not
+docked), 130 / 143 / 129 stopped by Ctrl-C / SIGTERM / SIGHUP (a single run records status
 "interrupted" with its time series so far: compliant_docking/run/interrupt.py).
 A sweep (``-m``): 1 if any job failed (or its worker died), else 0 — jobs that did not
 dock are results, counted in the summary (compliant_docking/sweep/summary.py); with
@@ -35,10 +36,10 @@ from hydra.core.hydra_config import HydraConfig
 from hydra.types import RunMode
 from omegaconf import DictConfig, OmegaConf
 
-from compliant_docking import CONF_DIR
+from compliant_docking import CONF_DIR, exit_codes
 from compliant_docking.config import compose_cache, register_schemas
 from compliant_docking.run import interrupt
-from compliant_docking.sweep import launchers, resume
+from compliant_docking.sweep import launchers, progress, resume
 from compliant_docking.sweep.directories import release_empty, sweep_dir_of
 from compliant_docking.sweep.guard import Refused, refuse
 from compliant_docking.sweep.session import SweepSession
@@ -82,6 +83,7 @@ class CommandLine:
         if any(arg in ("--help", "-h") for arg in argv):
             print_help(argv)
             return 0
+        argv = progress.verbose_argv(argv)  # -v: the launchers' per-job launch lines too
         try:
             argv = resume.translate_argv(argv)  # resume=<sweep dir> → Hydra overrides
         except resume.ResumeError as exc:
@@ -179,7 +181,7 @@ def _errors_reported() -> Iterator[None]:
                 codes = re.search(r"exit codes of the workers are \{([^}]*)\}", str(exc))
                 detail = f" (exit codes {codes.group(1)})" if codes else ""
                 print(f"sweep: a worker process died{detail}: {first}", file=sys.stderr, flush=True)
-                raise SystemExit(1) from None
+                raise SystemExit(exit_codes.FAILED) from None
 
         return report(guarded)
 
@@ -228,8 +230,13 @@ Examples:
   compliant-docking +tracking=mlflow ...                     (log to MLflow: docs/tracking.md)
   python -m compliant_docking.report runs/multirun/<date>/<time>      (tables and figures again)
 
-Exit status: 0 success, 1 the run failed (error, divergence) or the command was refused,
-3 the run's gate did not pass, 130 / 143 / 129 stopped by Ctrl-C / SIGTERM / SIGHUP.
+Exit status (the same for every command; docs/exit_codes.md):
+  0    the run docked (tracking gate: PASS); a sweep whose jobs all ran
+  1    failed: the run's error or divergence; a sweep with a failed job
+  2    refused before anything ran or was written (a bad key, value, file or directory)
+  3    not docked: the run finished but its gate did not pass (tracking gate: FAIL)
+  130 / 143 / 129  interrupted by Ctrl-C / SIGTERM / SIGHUP (what finished is recorded)
+-v (--verbose) with -m: also Hydra's launch line of every job before the first result.
 Hydra's own options: --hydra-help, --cfg job (print the composed config), --info,
 -sc install=bash (shell completion: eval "$(compliant-docking -sc install=bash)").
 """

@@ -15,6 +15,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from compliant_docking import exit_codes
 from compliant_docking.sim.geometry.cad import COLLISIONS, UNITS, ConvertOptions, Refused, convert
 from compliant_docking.sim.geometry.conform import ConformSettings
 from compliant_docking.sim.geometry.convex import CoacdSettings
@@ -164,7 +165,7 @@ def _main(argv: list[str] | None) -> int:
             paths = export_keyed(args.export_keyed, *sides)
         except ValueError as exc:  # e.g. --sides outside the keyed plug's range
             print(f"error: --sides: {exc}", file=sys.stderr)
-            return 1
+            return exit_codes.REFUSED
         for path in paths:
             print(f"wrote {path}")
         return 0
@@ -188,15 +189,15 @@ def _main(argv: list[str] | None) -> int:
     for name, text in refused:
         print(f"error: {FLAGS.get(name, '--' + name)}: {text}", file=sys.stderr)
     if refused:
-        return 1
+        return exit_codes.REFUSED
     try:
         result = convert(args.plug, args.socket, args.out, options)
     except Refused as exc:
         print(f"refused: {exc}", file=sys.stderr)
-        return 2
-    except (ValueError, ImportError) as exc:
+        return exit_codes.REFUSED
+    except (ValueError, ImportError) as exc:  # a file that cannot be read, a missing extra
         print(f"error: {exc}", file=sys.stderr)
-        return 1
+        return exit_codes.REFUSED
     m, out = result.manifest, Path(args.out)
     clearance, play, audit = m["clearance"], m["key_yaw_play_deg"], m["contact_audit"]
     collision = (

@@ -49,6 +49,6 @@ def test_a_cluster_launcher_without_its_extra_is_refused_naming_the_extra(tmp_pa
     result = subprocess.run(
         [sys.executable, "-c", code], cwd=REPO_ROOT, capture_output=True, text=True, timeout=120
     )
-    assert result.returncode == 1
+    assert result.returncode == 2
     assert "(the `cluster` extra): pip install 'compliant-docking[cluster]'" in result.stderr
     assert not (tmp_path / "sweep").exists()

@@ -33,7 +33,12 @@ LAYERS = (
     "cli",
 )
 #: top-level modules of the package and their layer (the rest of the top is the command line)
-ROOT_MODULES = {"compliant_docking", "compliant_docking.gl", "compliant_docking.extras"}
+ROOT_MODULES = {
+    "compliant_docking",
+    "compliant_docking.gl",
+    "compliant_docking.extras",
+    "compliant_docking.exit_codes",
+}
 MAX_TOP_LEVEL_MODULES = 12
 MAX_LINES = 450
 

@@ -9,6 +9,13 @@ from __future__ import annotations
 from enum import Enum
 
 
+class Precision(Enum):
+    """The floating-point width of the saved time series (``output.precision``)."""
+
+    float64 = "float64"  # the simulation's own values, bit for bit
+    float32 = "float32"  # about 7 significant digits: half the bytes before compression
+
+
 class Integrator(Enum):
     """MuJoCo integrators (``mjtIntegrator``)."""
 

@@ -27,6 +27,7 @@ from compliant_docking.config.enums import (
     FrictionComp,
     Integrator,
     NullSpaceMetric,
+    Precision,
     SE3Formulation,
 )
 from compliant_docking.config.geometry import (
@@ -177,7 +178,7 @@ class HQPConfig(ControllerConfig):
     already gives 0.5·K0 at F = 0. K0 is this config's, never the impedance gains.
     The torque constraint uses the robot's software clip (robot.max_torque).
 
-    The keys are the seed's (HQPConfig) names, kept for the command line; in the code they
+    The keys are the research code's (HQPConfig) names, kept for the command line; in the code they
     are spelled out: K0 the maximum task stiffness, K_min_ratio the minimum stiffness
     ratio, k_alpha the sigmoid gain, omega_th the manipulability threshold, k_sa the
     singularity-avoidance weight, K_ji / D_ji the joint-posture stiffness / damping and
@@ -189,8 +190,8 @@ class HQPConfig(ControllerConfig):
     k_alpha: float = at_least(0.0, unit="1/N")  # sigmoid gain of the adaptive stiffness [1/N]
     omega_th: float = at_least(0.0)  # manipulability threshold of singularity avoidance
     k_sa: float = at_least(0.0, unit="rad/s²")  # weight of singularity avoidance [rad/s²]
-    K_ji: List[float] = at_least(0.0, unit="1/s²")  # diagonal of the seed's 5·I [1/s²]
-    D_ji: List[float] = at_least(0.0, unit="1/s")  # diagonal of the seed's 10·I [1/s]
+    K_ji: List[float] = at_least(0.0, unit="1/s²")  # diagonal of the research code's 5·I [1/s²]
+    D_ji: List[float] = at_least(0.0, unit="1/s")  # diagonal of the research code's 10·I [1/s]
     k_ji: float = at_least(0.0)
     dt_p: float = positive(at_most=1.0, unit="s")  # zero-order-hold prediction horizon of the constraints
     eps_abs: float = positive()  # ProxQP absolute accuracy
@@ -234,7 +235,7 @@ class TrajectoryConfig:
 class QuinticConfig(TrajectoryConfig):
     """Rest-to-rest quintic along the stroke, orientation held (docs/control_laws.md §4)."""
 
-    duration: float = positive(unit="s")  # the seed's DockingConfig.traj_duration [s]
+    duration: float = positive(unit="s")  # the research code's DockingConfig.traj_duration [s]
     # the reference leads the plug by at most this along the insertion axis (null: open loop)
     lead_limit: Optional[float] = positive(unit="m")
 
@@ -414,6 +415,18 @@ class RenderConfig:
     crf: int = integers(0, 51)  # H.264 constant rate factor: 0 lossless … 51 worst
 
 
+# --------------------------------------------------------------------------- output
+@dataclass
+class OutputConfig:
+    """What a run writes beside its metrics (docs/run_directory.md, "Output size"): the
+    metrics, gate and figures are computed from the full-precision series in memory,
+    whatever is saved."""
+
+    timeseries: bool = MISSING  # false: metrics only, no timeseries.parquet
+    precision: Precision = MISSING  # float32: the saved series' floats in single precision
+    every: int = integers(1, 1_000_000)  # save every N-th control step (1: every step)
+
+
 # --------------------------------------------------------------------------- top level
 @dataclass
 class Config:
@@ -432,3 +445,4 @@ class Config:
     # per-run figures (figures/): null = a single run draws them, a sweep job does not;
     # true / false: always / never (`python -m compliant_docking.report PATH --runs` draws them later)
     figures: Optional[bool] = MISSING
+    output: OutputConfig = MISSING  # what the run saves beside its metrics

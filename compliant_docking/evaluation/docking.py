@@ -1,4 +1,5 @@
-"""Table-10 docking metrics (Ren & Shan 2026, seed ``DockingMetrics``), seat state and the docking gate.
+"""The docking metrics (Table 10 of Ren & Shan 2026, Acta Astronautica; the research code's
+``DockingMetrics``), seat state and the docking gate.
 
 Computed after the loop from the run's time series (see :mod:`compliant_docking.sim.telemetry`).
 Every value is a float, an int or None: None means it cannot be computed (no data, no
@@ -9,7 +10,7 @@ Conventions (docs/run_directory.md):
 - axial force = −f·axis, with f the measured force ON the tool: positive when the plug
   presses along the insertion direction (the socket pushes back).
 - the steady window is the last ``steady_window`` seconds of the run.
-- joint indices (``*_joint``) are 0-based, as in the seed.
+- joint indices (``*_joint``) are 0-based, as in the research code.
 """
 
 from __future__ import annotations
@@ -53,7 +54,7 @@ def compute_metrics(
     steady_window: float,
     force_window: float,
 ) -> DockingMetrics:
-    """Table-10 metrics of a run's time series, keyed as in the registry (``DOCKING_KEYS``).
+    """docking metrics of a run's time series, keyed as in the registry (``DOCKING_KEYS``).
 
     ``manipulability``: √det(J Jᵀ) per step (world Jacobian of the TCP), or None.
     ``force_window``: the averaging window of the filtered peak force [s]

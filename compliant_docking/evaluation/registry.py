@@ -36,7 +36,7 @@ class Metric:
     unit it is shown in ("" for a pure number). ``scale``: metrics.json value → shown
     value. ``spec``: format of the shown value in the console. ``joint_key``: for a
     per-joint maximum, the key of its (0-based) joint index, shown 1-based.
-    ``compared``: a row of the Table-10 comparison (summary.md) and bars. ``interval``: a
+    ``compared``: a row of the docking-metrics comparison (summary.md) and bars. ``interval``: a
     metric of the sweep statistics (results/compare.py): per configuration its mean and
     median with bootstrap 95 % intervals, and paired tests between controllers.
     """
@@ -72,8 +72,8 @@ class Metric:
 
 
 METRICS: tuple[Metric, ...] = (
-    # contact safety (Table 10)
-    # the per-step peak is the Table-10 metric: in a soft-contact simulation an impact's
+    # contact safety (Ren & Shan 2026, Table 10)
+    # the per-step peak is the paper's metric: in a soft-contact simulation an impact's
     # per-step peak scales with the contact time constant (solref), so the docking gate
     # judges the filtered peak, the peak of the mean over task.force_window
     Metric("peak_axial_force_N", CONTACT, "peak axial force (raw, per step)", "N", interval=True),
@@ -90,7 +90,7 @@ METRICS: tuple[Metric, ...] = (
     Metric("steady_force_mean_N", CONTACT_EVENTS, "steady force mean", "N"),
     Metric("steady_force_std_N", CONTACT_EVENTS, "steady force std", "N"),
     Metric("steady_contact_events_per_s", CONTACT_EVENTS, "steady make/break", "events/s", spec=".1f"),
-    # internal safety (Table 10)
+    # internal safety (Ren & Shan 2026, Table 10)
     Metric(
         "max_joint_pos_pct",
         INTERNAL,
@@ -103,7 +103,7 @@ METRICS: tuple[Metric, ...] = (
         "max_joint_vel_pct", INTERNAL, "max joint speed use", "%", spec=".1f", joint_key="max_joint_vel_joint"
     ),
     Metric("min_manipulability", INTERNAL, "min manipulability", "", spec=".4g"),
-    # tracking accuracy (Table 10: over the whole run, so a docking run's RMS is mostly the
+    # tracking accuracy (Ren & Shan 2026, Table 10: over the whole run, so a docking run's RMS is mostly the
     # intentional press of the reference past the seat); the motion before the first
     # contact and the press apart, under names that say so
     Metric("pos_tracking_rms_m", TRACKING, "position RMS, whole run", "mm", 1e3),
@@ -144,8 +144,8 @@ METRICS: tuple[Metric, ...] = (
 )
 
 BY_KEY: dict[str, Metric] = {m.key: m for m in METRICS}
-#: the seed's Table-10 metrics (DockingMetrics; with the tracking before contact and the press
-#: depth, computed with them) and the joint of each per-joint maximum
+#: the research code's docking metrics (DockingMetrics; with the tracking before contact and
+#: the press depth, computed with them) and the joint of each per-joint maximum
 TABLE10_KEYS: tuple[str, ...] = tuple(m.key for m in METRICS if m.section in (CONTACT, INTERNAL, TRACKING))
 DOCKING_KEYS: tuple[str, ...] = TABLE10_KEYS + tuple(
     m.joint_key for m in METRICS if m.section in (CONTACT, INTERNAL, TRACKING) and m.joint_key

@@ -2,7 +2,7 @@
 
 - :mod:`.load`: :func:`load_runs` (one row per job directory), :func:`scan`,
   :func:`newest_sweep`, :func:`locate_runs`;
-- :mod:`.tables`: configurations and their labels, the Table-10 comparison table, counts;
+- :mod:`.tables`: configurations and their labels, the docking-metrics comparison table, counts;
 - :mod:`.stats`: Wilson and bootstrap intervals, paired tests, Holm's correction;
 - :mod:`.compare`: per-configuration statistics and paired comparisons of a frame;
 - :mod:`.summary`: ``summary.md`` and the summary files;

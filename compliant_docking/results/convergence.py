@@ -34,6 +34,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from compliant_docking import exit_codes
 from compliant_docking.results.load import OVERRIDDEN, load_runs
 from compliant_docking.results.tables import _markdown_grid
 
@@ -188,7 +189,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         text = report(pair_jobs(runs, args.vary))
     except (ValueError, FileNotFoundError) as error:
         print(f"compliant_docking.results.convergence: {error}", file=sys.stderr)
-        return 1
+        return exit_codes.REFUSED
     print(text, end="")
     if args.out:
         args.out.write_text(text)

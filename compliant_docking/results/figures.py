@@ -1,6 +1,6 @@
 """Figures comparing runs (the run figures' style, PNG; PDF on request), from a :func:`load_runs` frame.
 
-- :func:`metric_bars`: grouped bars of the Table-10 metrics and the success rate across
+- :func:`metric_bars`: grouped bars of the docking metrics and the success rate across
   configurations (mean over repeats, whiskers: the bootstrap 95 % interval of the mean,
   Wilson's for the success rate);
 - :func:`success_vs_misalignment`, :func:`success_map` (:mod:`.success_figures`): success
@@ -70,7 +70,7 @@ def _split_keys(df: pd.DataFrame) -> tuple[str | None, list[str]]:
 
 
 def metric_bars(df: pd.DataFrame, out_dir: str | Path | None = None, stem: str = "table10_bars"):
-    """Grouped bars of the Table-10 metrics (one panel each) and the success rate.
+    """Grouped bars of the docking metrics (one panel each) and the success rate.
 
     Bars are grouped on the x axis by the controller (or the first varying key); the
     bars of a group are the other varying keys (colours, legend). Heights are means
@@ -160,7 +160,7 @@ def metric_bars(df: pd.DataFrame, out_dir: str | Path | None = None, stem: str =
             handles, labels, loc="lower center", ncols=min(len(hues), 4), bbox_to_anchor=(0.5, 0.16 / height)
         )
     if x_key:
-        fig.suptitle(f"Table-10 metrics by {x_key}")
+        fig.suptitle(f"docking metrics by {x_key}")
     jobs = df.groupby(configuration_labels(df), sort=False).size() if len(df) else pd.Series(dtype=int)
     note(fig, [f"bars: mean over {jobs.min()}–{jobs.max()} jobs per configuration; whiskers: 95 % interval "
                "(bootstrap of the mean; Wilson for the success rate)" if len(jobs) else ""])  # fmt: skip

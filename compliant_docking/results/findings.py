@@ -4,11 +4,15 @@ Does HQP-AC lower the FR3's first-strike and peak axial force against impedance 
 over ± lateral misalignment, and at what cost in success rate and docking time? The
 research code reported 27.2 N → 5.2 N (−81 %) on its own interface.
 
-    python -m compliant_docking.results.findings SWEEP_DIR --out docs/findings.md
+    python -m compliant_docking.results.findings SWEEP_DIR            # → SWEEP_DIR/findings.md
+    python -m compliant_docking.results.findings SWEEP_DIR --docs     # → docs/findings.md
 
-reads the sweep with :func:`~compliant_docking.results.load.load_runs`, keeps the jobs of
-one robot (``--robot``, fr3) and two controllers (``--baseline`` impedance, ``--candidate``
-hqp), pairs the jobs that docked into the same socket (the same planner and the same draw:
+writes the finding next to the sweep (``SWEEP_DIR/findings.md``; ``--out FILE`` elsewhere,
+``--out -`` prints it); ``--docs`` rewrites the tracked docs/findings.md of the checkout,
+which only a deliberate update of the docs should do (a tracked file changed flips
+``git_dirty`` in the provenance of every later run). It reads the sweep with
+:func:`~compliant_docking.results.load.load_runs`, keeps the jobs of one robot (``--robot``,
+fr3) and two controllers (``--baseline`` impedance, ``--candidate`` hqp), pairs the jobs that docked into the same socket (the same planner and the same draw:
 the draws are common random numbers), and writes the finding as Markdown:
 
 - per force metric (first strike, peak axial): the medians, the median of the paired
@@ -339,6 +343,12 @@ def sensitivity_markdown(
     ]
 
 
+#: the default output, in the sweep directory
+OUT_NAME = "findings.md"
+#: the tracked findings of the checkout (``--docs``), relative to the repository's root
+DOCS_FINDINGS = Path("docs") / "findings.md"
+
+
 def main(argv: list[str] | None = None) -> int:
     """``python -m compliant_docking.results.findings``; the exit status (a signal: 128 + its number)."""
     from compliant_docking.run import interrupt
@@ -353,7 +363,11 @@ def _main(argv: list[str] | None) -> int:
     )
     parser.add_argument("sweep", type=Path, help="the sweep directory (python -m compliant_docking -m "
                         "+experiment=controller_comparison)")  # fmt: skip
-    parser.add_argument("--out", type=Path, default=None, help="the Markdown file (default: print)")
+    where = parser.add_mutually_exclusive_group()
+    where.add_argument(
+        "--out", type=Path, default=None, help="the Markdown file (default: SWEEP/findings.md; -: print it)"
+    )
+    where.add_argument("--docs", action="store_true", help=f"rewrite the checkout's tracked {DOCS_FINDINGS}")
     parser.add_argument("--robot", default="fr3")
     parser.add_argument("--baseline", default="impedance")
     parser.add_argument("--candidate", default="hqp")
@@ -381,14 +395,21 @@ def _main(argv: list[str] | None) -> int:
             text = head + "\n".join(extra) + "\n## What this does and does not say" + tail
     except ValueError as exc:
         parser.error(str(exc))
-    if args.out is None:
+    out = args.out or args.sweep / OUT_NAME
+    if args.docs:
+        out = Path(__file__).resolve().parents[2] / DOCS_FINDINGS
+        if not out.parent.is_dir():
+            parser.error(
+                f"--docs: no {DOCS_FINDINGS.parent}/ beside the package (not a checkout); use --out FILE"
+            )
+    if str(out) == "-":
         print(text)
-    else:
-        from compliant_docking.run.files import atomic_write_text
+        return 0
+    from compliant_docking.run.files import atomic_write_text
 
-        args.out.parent.mkdir(parents=True, exist_ok=True)
-        atomic_write_text(args.out, text)  # a stop leaves the old file or the new one, never half
-        print(f"wrote {args.out}")
+    out.parent.mkdir(parents=True, exist_ok=True)
+    atomic_write_text(out, text)  # a stop leaves the old file or the new one, never half
+    print(f"wrote {out}")
     return 0
 
 

@@ -62,7 +62,7 @@ def load_runs(path: str | os.PathLike = "runs") -> pd.DataFrame:
       and has no composed config);
     - every key of metrics.json: the config choices (``robot``, ``controller``,
       ``trajectory``, … always set, whether overridden or not), ``overrides`` (the job's
-      overrides, space-separated), the Table-10 metrics (``peak_axial_force_N``, …),
+      overrides, space-separated), the docking metrics (``peak_axial_force_N``, …),
       seat errors, the drawn misalignment (``misalignment_x_m``, ``misalignment_y_m``,
       ``misalignment_lateral_m``, ``misalignment_yaw_deg``, ``misalignment_tilt_deg``,
       ``misalignment_seed``), timing, controller diagnostics. JSON null becomes None/NaN;

@@ -46,7 +46,22 @@ def note(fig, lines: Sequence[str]) -> None:
     """Small text at the figure's bottom left: what the figure pools or leaves out."""
     lines = [line for line in lines if line]
     if lines:
-        fig.text(0.005, 0.005, "\n".join(lines), fontsize=FONT - 1.5, va="bottom", ha="left", color="0.3")
+        text = fig.text(
+            0.005, 0.005, "\n".join(lines), fontsize=FONT - 1.5, va="bottom", ha="left", color="0.3"
+        )
+        fit_width(fig, text)
+
+
+def fit_width(fig, text, margin: float = 0.995) -> None:
+    """Shrink ``text``'s font until it fits the figure's width (a long note on a narrow
+    figure, e.g. one panel): a saved figure would clip it otherwise."""
+    renderer = fig.canvas.get_renderer()
+    for _ in range(8):  # a glyph's width is not proportional to the size at small sizes
+        extent = text.get_window_extent(renderer)
+        room = fig.bbox.width * margin - extent.x0
+        if extent.width <= room or room <= 0:
+            return
+        text.set_fontsize(text.get_fontsize() * max(room / extent.width, 0.5) * 0.97)
 
 
 def facets(df: pd.DataFrame, rows_key: str = "robot", cols_key: str = "controller"):

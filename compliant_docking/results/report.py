@@ -4,7 +4,7 @@ PATH is anything :func:`compliant_docking.results.load_runs` reads: one run dire
 a sweep directory, a tree of them, or all of ``runs/``. Writes into PATH (or ``--out``):
 
 - ``summary.parquet``, ``summary.csv``: one row per job (the load_runs frame);
-- ``comparison.csv``, ``summary.md``: the Table-10 comparison, one column per
+- ``comparison.csv``, ``summary.md``: the docking-metrics comparison, one column per
   configuration (summary.md also lists every job);
 - ``comparison/``: ``table10_bars``, ``success_vs_misalignment`` (when the
   misalignment varies), ``force_overlay`` (PNG; ``--formats png pdf`` for PDF too);
@@ -26,6 +26,7 @@ import sys
 import warnings
 from pathlib import Path
 
+from compliant_docking import exit_codes
 from compliant_docking.results.load import RunSkippedWarning, scan
 from compliant_docking.results.summary import write_summary
 from compliant_docking.results.tables import counts
@@ -71,20 +72,20 @@ def _main(argv: list[str] | None) -> int:
     path = Path(args.path)
     if not path.exists():
         print(f"report: no such directory: {path}", file=sys.stderr)
-        return 2
+        return exit_codes.REFUSED
     from compliant_docking.viz.plotting import check_formats
 
     try:
         formats = check_formats(args.formats)
     except ValueError as exc:
         print(f"report: --formats: {exc}", file=sys.stderr)
-        return 2
+        return exit_codes.REFUSED
     frame, skipped = scan(path)
     for job_dir in skipped:
         print(f"report: skipped {job_dir}: {read_metrics(job_dir)[1]}", file=sys.stderr)
     if frame.empty:
         print(f"report: no finished runs under {path}", file=sys.stderr)
-        return 2
+        return exit_codes.REFUSED
     out = args.out or (path if path.is_dir() else path.parent)
     problem = _unwritable(out)
     if problem:
@@ -93,7 +94,7 @@ def _main(argv: list[str] | None) -> int:
             "elsewhere with --out DIR",
             file=sys.stderr,
         )
-        return 2
+        return exit_codes.REFUSED
     with warnings.catch_warnings(record=True) as caught:  # broken files: skipped, each said
         warnings.simplefilter("always", RunSkippedWarning)
         try:
@@ -105,7 +106,7 @@ def _main(argv: list[str] | None) -> int:
                 "figures elsewhere with --out DIR",
                 file=sys.stderr,
             )
-            return 2
+            return exit_codes.REFUSED
     for warning in caught:
         if issubclass(warning.category, RunSkippedWarning):
             print(f"report: {warning.message}", file=sys.stderr)

@@ -156,7 +156,8 @@ def _success_against(df, components, title: str, out_dir, stem: str):
     series_key, series, pooled = _series(df)
     force_key = "first_strike_force_N" if "first_strike_force_N" in df else "peak_axial_force_N"
     force_label = "first-strike force [N]" if force_key == "first_strike_force_N" else "peak axial force [N]"
-    width, height = 2.3 * len(components) + 0.6, 4.1
+    # one panel (misalignment_keyed: the yaw only) still gets room for the legend and the note
+    width, height = max(2.3 * len(components) + 0.6, 4.4), 4.1
     fig, axes = plt.subplots(2, len(components), figsize=(width, height), squeeze=False, sharex="col")
     fig.subplots_adjust(left=0.55 / width, right=1 - 0.1 / width, bottom=0.95 / height, top=1 - 0.35 / height,
                         wspace=0.3, hspace=0.12)  # fmt: skip

@@ -4,12 +4,12 @@
   frame, one row per job;
 - ``comparison.csv``, ``comparison.parquet``: one row per configuration, the statistics of
   :func:`~compliant_docking.results.compare.configuration_stats` (success rate with its
-  Wilson interval, means and medians with bootstrap intervals, the Table-10 means);
+  Wilson interval, means and medians with bootstrap intervals, the docking metrics' means);
 - ``paired.csv``, ``paired.parquet``: the paired comparisons between controllers
   (:func:`~compliant_docking.results.compare.paired_comparisons`; empty when the
   controller does not vary);
 - ``summary.md``: the counts, the configurations, the paired comparisons in words and
-  tables, the statistics per configuration, the Table-10 comparison and every job.
+  tables, the statistics per configuration, the docking-metrics comparison and every job.
 """
 
 from __future__ import annotations
@@ -218,7 +218,7 @@ def summary_markdown(
     per_configuration: pd.DataFrame | None = None,
     paired: pd.DataFrame | None = None,
 ) -> str:
-    """summary.md: counts, configurations, paired comparisons, statistics, Table 10, jobs
+    """summary.md: counts, configurations, paired comparisons, statistics, the docking metrics, jobs
     (``per_configuration``, ``paired``: the tables when already computed)."""
     unfinished = unfinished or []
     parts = [
@@ -278,7 +278,7 @@ def summary_markdown(
                 "",
             ]
         parts += [
-            "## Comparison (Table 10)",
+            "## Comparison: the docking metrics (Ren & Shan 2026, Table 10)",
             "",
             "Mean over the jobs of each configuration, in display units.",
             "",

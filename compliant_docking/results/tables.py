@@ -1,4 +1,4 @@
-"""The comparison of a set of runs: configurations and their labels, the Table-10 metrics
+"""The comparison of a set of runs: configurations and their labels, the docking metrics
 table, job lines and counts (the summary files: :mod:`compliant_docking.results.summary`).
 
 :func:`comparison_table` turns the rows of :func:`~compliant_docking.results.load.load_runs`
@@ -159,7 +159,7 @@ def configuration_labels(df: pd.DataFrame, keys: list[str] | None = None) -> pd.
 
 
 def comparison_table(df: pd.DataFrame, keys: list[str] | None = None) -> pd.DataFrame:
-    """The Table-10 comparison: one column per configuration, rows (section, metric).
+    """The docking-metrics comparison: one column per configuration, rows (section, metric).
 
     Metrics are the mean over the finished jobs of a configuration (repeats: seeds),
     in display units (mm, deg, N, %); the ``success`` section holds ``jobs``,

@@ -101,7 +101,10 @@ def redraw(job_dir: Path, formats: Sequence[str] | None = None) -> list[Path]:
     """Draw the figures of a finished run from its files; ValueError saying what is missing."""
     job_dir = Path(job_dir)
     if not rundir.has_timeseries(job_dir):
-        raise ValueError("no timeseries.parquet (the run failed before its time series was written)")
+        raise ValueError(
+            "no timeseries.parquet (the run failed before its time series was written, "
+            "or ran with output.timeseries=false: metrics only)"
+        )
     cfg = rundir.read_config(job_dir)
     if cfg is None:
         raise ValueError("no readable .hydra/config.yaml (needed for the torque limits and the docking axis)")

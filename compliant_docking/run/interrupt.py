@@ -27,6 +27,8 @@ import sys
 import threading
 from collections.abc import Callable, Iterator
 
+from compliant_docking import exit_codes
+
 #: the signals that stop a command
 SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
 #: how a record names each
@@ -48,7 +50,7 @@ def signum_of(exc: BaseException) -> int:
 
 def exit_status(exc: BaseException) -> int:
     """``128 + signal number``: 130 for Ctrl-C, 143 for SIGTERM, 129 for SIGHUP."""
-    return 128 + signum_of(exc)
+    return exit_codes.interrupted(signum_of(exc))
 
 
 def name(signum: int) -> str:

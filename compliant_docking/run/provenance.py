@@ -29,7 +29,8 @@ spaces), first 16 hex digits. Left out because they change how a job reports, no
 it computes (:data:`HASH_EXCLUDED`): ``hydra`` (where and how the job was launched: the
 sweep directory, the launcher, the job number), ``task.progress`` (the console
 progress line) and ``figures`` (whether the job draws its per-run figures, which
-``python -m compliant_docking.report --runs`` can draw later from the time series). Everything else counts, ``render`` included (a video adds files and
+``python -m compliant_docking.report --runs`` can draw later from the time series) and
+``output`` (how much of the time series is saved: the metrics are the same). Everything else counts, ``render`` included (a video adds files and
 keys to the run directory). The hash covers the config, not the code: files the config
 names (the robots' MJCF) and the package itself are tracked by ``git_commit``,
 ``git_dirty`` and the versions.
@@ -48,7 +49,7 @@ from importlib import metadata
 from pathlib import Path
 
 #: dotted config keys left out of :func:`config_hash` (see the module docstring)
-HASH_EXCLUDED = ("hydra", "task.progress", "figures")
+HASH_EXCLUDED = ("hydra", "task.progress", "figures", "output")
 #: hex digits of the SHA-256 kept in ``config_hash`` (64 bits)
 HASH_DIGITS = 16
 #: ``version_<key>`` → the distribution whose installed version it records (None: Python)

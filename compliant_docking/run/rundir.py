@@ -119,6 +119,22 @@ def write_timeseries(job_dir: Path, frame: pd.DataFrame) -> None:
     )
 
 
+def saved_timeseries(frame: pd.DataFrame, output) -> pd.DataFrame | None:
+    """The part of the run's time series that ``output`` (the config's ``output`` node)
+    saves: None for ``output.timeseries=false`` (metrics only); every ``output.every``-th
+    row (steps 0, N, 2N, …); the float columns as float32 for ``output.precision=float32``.
+    The default (true, float64, 1) is ``frame`` itself, bit for bit."""
+    if not output.timeseries:
+        return None
+    every = int(output.every)
+    if every > 1:
+        frame = frame.iloc[::every].reset_index(drop=True)
+    if getattr(output.precision, "name", output.precision) == "float32":
+        floats = frame.select_dtypes("float64").columns
+        frame = frame.astype(dict.fromkeys(floats, "float32"))
+    return frame
+
+
 def read_timeseries(job_dir: Path, columns: list[str] | None = None) -> pd.DataFrame:
     """The job's time series (all columns, or ``columns``)."""
     import pandas as pd
@@ -180,15 +196,20 @@ def artefact_problem(job_dir: Path, record: dict) -> str | None:
 
     job_dir = Path(job_dir)
     path = job_dir / TIMESERIES_FILE
-    if not path.is_file():
+    # the rows saved (output.every, docs/run_directory.md); a record without the key: one a step
+    expected = record.get("timeseries_rows", record.get("steps"))
+    unit = "rows saved" if record.get("timeseries_rows") not in (None, record.get("steps")) else "steps"
+    if "timeseries_rows" in record and expected is None:
+        pass  # output.timeseries=false: metrics only, no time series to check
+    elif not path.is_file():
         return f"{TIMESERIES_FILE} is missing"
-    try:
-        rows = pq.read_table(path).num_rows  # every page: a truncated or corrupt file fails here
-    except Exception as exc:
-        return f"{TIMESERIES_FILE} cannot be read ({type(exc).__name__}: {_first_line(exc)})"
-    steps = record.get("steps")
-    if isinstance(steps, int) and rows != steps:
-        return f"{TIMESERIES_FILE} has {rows} rows, {METRICS_FILE} says {steps} steps"
+    else:
+        try:
+            rows = pq.read_table(path).num_rows  # every page: a truncated or corrupt file fails here
+        except Exception as exc:
+            return f"{TIMESERIES_FILE} cannot be read ({type(exc).__name__}: {_first_line(exc)})"
+        if isinstance(expected, int) and rows != expected:
+            return f"{TIMESERIES_FILE} has {rows} rows, {METRICS_FILE} says {expected} {unit}"
     if not (job_dir / SUMMARY_FILE).is_file():
         return f"{SUMMARY_FILE} is missing"
     video = record.get("video")

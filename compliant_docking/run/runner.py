@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 from omegaconf import DictConfig, OmegaConf
 
+from compliant_docking import exit_codes
 from compliant_docking.evaluation.registry import CONTACT_KEYS, DOCKING_KEYS
 from compliant_docking.run import figures as run_figures
 from compliant_docking.run import interrupt, provenance, rundir
@@ -28,8 +29,8 @@ from compliant_docking.run.summary import display_path, format_summary
 from compliant_docking.sim import dynamics, model_error, sensor
 from compliant_docking.sim.misalignment import record_for as misalignment_record
 
-#: exit status of ``python -m compliant_docking``
-EXIT_SUCCESS, EXIT_FAILED, EXIT_GATE = 0, 1, 3
+#: exit status of ``python -m compliant_docking`` (the table: compliant_docking/exit_codes.py)
+EXIT_SUCCESS, EXIT_FAILED, EXIT_GATE = exit_codes.OK, exit_codes.FAILED, exit_codes.NOT_DOCKED
 
 
 def _one_line(exc: BaseException) -> str:
@@ -271,7 +272,10 @@ def evaluate(sim, out_dir: Path | None, *, figures: bool) -> dict:
 
     if out_dir is None:
         return result
-    rundir.write_timeseries(out_dir, ts)
+    saved = rundir.saved_timeseries(ts, cfg.output)
+    result["timeseries_rows"] = None if saved is None else len(saved)
+    if saved is not None:
+        rundir.write_timeseries(out_dir, saved)
     if figures:
         run_figures.draw(
             out_dir,

@@ -1,6 +1,6 @@
 """Scene assembly: robot MJCF + tool fragment + target fragment + glue → MjModel.
 
-The recipe follows the seed's ``Scene.build_mjmodel``:
+The recipe follows the research code's ``Scene.build_mjmodel``:
 
 1. the arm spec is loaded from the robot's MJCF;
 2. the tool's root body ``dock`` is posed relative to the flange site

@@ -12,7 +12,6 @@ Gymnasium environment (compliant_docking/env/) advances it a policy step at a ti
 
 from __future__ import annotations
 
-import sys
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -35,6 +34,7 @@ from compliant_docking.planning.lead import LeadLimit, bounded
 from compliant_docking.sim import model_error
 from compliant_docking.sim.context import ControlContext, StepController
 from compliant_docking.sim.models import ArmModel
+from compliant_docking.sim.progress import RunProgress
 from compliant_docking.sim.scene import Scene, build_scene
 from compliant_docking.sim.sensor import Sensing, sensing, wrench_reader
 from compliant_docking.sim.task import run_duration, task_waypoints
@@ -121,7 +121,7 @@ class Simulation:
             wrench = np.zeros(6)
             read_wrench = self.sensing.reader(self.scene, data, measured, wrench)
             update = self.sensing.updater(arm)
-        reporter = _Progress(self.n_steps, dt, enabled=progress)
+        reporter = RunProgress(self.n_steps, dt, enabled=progress)
         start = time.perf_counter()
         # The planner's work is part of the loop's time: its table of every step first.
         self.reference = self.planner.table(np.arange(self.n_steps) * dt)
@@ -218,32 +218,6 @@ def _divergence_reason(t: float, qvel: np.ndarray, tau: np.ndarray, bad_qacc: in
     else:
         what = f"a joint speed reached {np.abs(qvel).max():.3g} rad/s (limit {EXPLODING_SPEED:g})"
     return f"simulation diverged at t = {t:.3f} s: {what}"
-
-
-class _Progress:
-    """A light progress indicator on stderr (one update per simulated second)."""
-
-    def __init__(self, n_steps: int, dt: float, enabled: bool):
-        self.enabled = enabled
-        self.n_steps, self.dt = n_steps, dt
-        self.every = max(int(round(1.0 / dt)), 1)
-        self.tty = sys.stderr.isatty()
-        self.start = time.perf_counter()
-
-    def update(self, k: int) -> None:
-        if not self.enabled or k % self.every or not self.tty:
-            return
-        elapsed = time.perf_counter() - self.start
-        sys.stderr.write(
-            f"\r  simulating {k * self.dt:6.1f} / {self.n_steps * self.dt:.1f} s"
-            f"  ({k * self.dt / max(elapsed, 1e-9):5.1f}× real time)"
-        )
-        sys.stderr.flush()
-
-    def done(self) -> None:
-        if self.enabled and self.tty:
-            sys.stderr.write("\r" + " " * 60 + "\r")
-            sys.stderr.flush()
 
 
 #: the robot's lists with one value per joint

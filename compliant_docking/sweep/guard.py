@@ -18,7 +18,7 @@ config and before Hydra creates any directory:
   it the configs it composed (:class:`_Composed`), so the check costs nothing extra.
 
 A refusal prints every problem (one paragraph each, naming the config key) and exits
-with status 1 through :class:`Refused` (a ``SystemExit``: Hydra lets it through its
+with status 2 through :class:`Refused` (a ``SystemExit``: Hydra lets it through its
 callback guard); nothing is created, and the command line neither summarises the sweep
 nor suggests a resume.
 
@@ -48,16 +48,17 @@ from typing import Any
 from hydra.experimental.callback import Callback
 from omegaconf import DictConfig, OmegaConf
 
+from compliant_docking import exit_codes
 from compliant_docking.run import interrupt
 from compliant_docking.sweep.directories import claim, job_dir_problems, job_subdir
 from compliant_docking.sweep.watchdog import start_watchdog
 
 
 class Refused(SystemExit):
-    """A command refused before anything ran or was written (exit status 1)."""
+    """A command refused before anything ran or was written (exit status 2)."""
 
     def __init__(self, report: str) -> None:
-        super().__init__(1)
+        super().__init__(exit_codes.REFUSED)
         self.report = report
 
 

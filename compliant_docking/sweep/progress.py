@@ -10,12 +10,15 @@ This module is imported by the launching process and every job: keep it light.
 
 from __future__ import annotations
 
+import logging
 import os
 import sys
 import threading
+import time
 from pathlib import Path
 
 from compliant_docking.run.rundir import FAILED_STATUSES, METRICS_FILE, read_metrics
+from compliant_docking.sim.progress import duration_text
 
 #: how often :class:`ProgressWatcher` looks for finished jobs [s]
 POLL_INTERVAL_S = 2.0
@@ -23,6 +26,26 @@ POLL_INTERVAL_S = 2.0
 #: while the sweep runs
 COUNT_FILE = ".finished_jobs"
 COUNT_WIDTH = 20
+
+
+#: the command-line flag that shows the launchers' per-job launch lines again, and the
+#: Hydra override it stands for (conf/hydra/hydra_logging/console.yaml)
+VERBOSE_FLAGS = ("-v", "--verbose")
+VERBOSE_OVERRIDE = "hydra.hydra_logging.handlers.console.filters=[]"
+
+
+class LaunchLines(logging.Filter):
+    """Leaves out the launchers' per-job launch lines (``\t#<n> : controller=hqp …``: Hydra's
+    joblib and submitit launchers and ours log one per job before any job runs), a
+    ``logging`` filter named in the Hydra logging config conf/hydra/hydra_logging/console.yaml."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        return not str(record.msg).startswith("\t#")
+
+
+def verbose_argv(argv: list[str]) -> list[str]:
+    """``-v`` / ``--verbose`` replaced by the override that keeps the launch lines."""
+    return [VERBOSE_OVERRIDE if arg in VERBOSE_FLAGS else arg for arg in argv]
 
 
 def emit(text: str) -> None:
@@ -42,10 +65,28 @@ def display(path: Path) -> str:
 
 
 def reset_count(sweep_dir: Path) -> None:
-    """Start the sweep's count of finished jobs at 0 (the launching process, before any job)."""
+    """Start the sweep's count of finished jobs at 0 (the launching process, before any job);
+    the sweep's start time (epoch seconds) follows the count, for the time left."""
     path = Path(sweep_dir) / COUNT_FILE
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(f"{0:<{COUNT_WIDTH}d}\n")
+    path.write_text(f"{0:<{COUNT_WIDTH}d}{time.time():.3f}\n")
+
+
+def started_at(sweep_dir: Path) -> float | None:
+    """When the sweep started (epoch seconds, from its count file); None when unknown."""
+    try:
+        return float(Path(sweep_dir, COUNT_FILE).read_text()[COUNT_WIDTH:].strip())
+    except (OSError, ValueError):
+        return None
+
+
+def time_left(started: float | None, done: int | None, total: int | None, now: float | None = None) -> str:
+    """``about 1 min 20 s left`` at the sweep's pace so far (its wall time per finished job
+    times the jobs still to finish); "" when unknown, finished or under a second."""
+    if started is None or not done or not total or done >= total:
+        return ""
+    left = ((time.time() if now is None else now) - started) / done * (total - done)
+    return f"about {duration_text(left)} left" if left >= 0.5 else ""  # "about 0 s" says nothing
 
 
 def remove_count(sweep_dir: Path) -> None:
@@ -114,11 +155,32 @@ def job_line(out_dir: Path, sweep_dir: Path, total: int | None, done: int | None
             parts.append(f"{events:.0f} contact events/s")
     wall = record.get("wall_time_s")
     parts.append("n/a" if wall is None else f"{wall:.1f} s")
+    left = time_left(started_at(sweep_dir), done, total)
+    if left:
+        parts.append(left)
     if status in FAILED_STATUSES and record.get("error"):
-        parts.append(str(record["error"])[:160])
+        parts.append(clauses(str(record["error"])))
     elif success is False and record.get("gate_verdict"):
-        parts.append(str(record["gate_verdict"])[:160])  # what failed
+        parts.append(clauses(str(record["gate_verdict"])))  # what failed
     return " · ".join(parts)
+
+
+#: about how long the error or verdict on a progress line may be [characters]
+REASON_CHARS = 160
+
+
+def clauses(text: str, limit: int = REASON_CHARS) -> str:
+    """``text`` shortened to whole clauses (``; ``-separated, the first always whole) of
+    about ``limit`` characters, ending ``; … (+N more)`` when some were left out: never cut
+    inside a word or a number ("over the 5" of "over the 50 N budget")."""
+    parts = " ".join(text.split()).split("; ")
+    kept = parts[:1]
+    for part in parts[1:]:
+        if len("; ".join([*kept, part])) > limit:
+            break
+        kept.append(part)
+    more = len(parts) - len(kept)
+    return "; ".join(kept) + (f"; … (+{more} more)" if more else "")
 
 
 class ProgressWatcher:

@@ -43,6 +43,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from compliant_docking import exit_codes
 from compliant_docking.run.files import atomic_write_text
 from compliant_docking.run.rundir import (
     HYDRA_DIR,
@@ -354,10 +355,10 @@ def write_hydra_dir(cfg, out_dir: Path) -> None:
 
 
 #: exit status of a refused resume: a refusal, like every refusal of the command line
-EXIT_REFUSED = 1
+EXIT_REFUSED = exit_codes.REFUSED
 
 
 def fail(exc: ResumeError) -> int:
-    """Print a refused resume; the exit status (1: refused, nothing ran or was written)."""
+    """Print a refused resume; the exit status (2: refused, nothing ran or was written)."""
     print(f"resume: {exc}", file=sys.stderr)
     return EXIT_REFUSED

@@ -18,10 +18,11 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from compliant_docking import exit_codes
 from compliant_docking.sweep.progress import display, emit
 
 #: exit status of a sweep with a failed (or vanished) job, and of a clean one
-EXIT_FAILED, EXIT_OK = 1, 0
+EXIT_FAILED, EXIT_OK = exit_codes.FAILED, exit_codes.OK
 
 
 @dataclass

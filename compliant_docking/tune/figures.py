@@ -39,18 +39,24 @@ def plot_history(frame: pd.DataFrame, objective: Objective, out_dir: Path, metri
     for ax, name in zip(axes[:, 0], names):
         good = told[told["feasible"].astype(bool)]
         bad = told[~told["feasible"].astype(bool)]
-        ax.plot(good["number"], good[name], "o", ms=4, color="C0", label="trial (every draw docked)")
         if len(good):
+            ax.plot(good["number"], good[name], "o", ms=4, color="C0", label="trial (every draw docked)")
             best = np.minimum.accumulate(good[name].to_numpy())
             ax.step(good["number"], best, where="post", color="C3", lw=1.2, label="best so far")
-            top = float(good[name].max())
-            low = float(good[name].min())
-            ax.set_ylim(low - 0.1 * (top - low + 1e-9), top + 0.25 * (top - low + 1e-9))
-        if len(bad):
-            edge = ax.get_ylim()[1] if len(good) else 1.0
-            ax.plot(bad["number"], [edge] * len(bad), "x", color="0.4", clip_on=False, label="penalised")
+            top, low = float(good[name].max()), float(good[name].min())
+            # a single value (or equal ones) gets ±10 % of its size (at least ±0.5), not a 1e-9 span
+            span = top - low if top > low else max(0.2 * abs(top), 1.0)
+            ax.set_ylim(low - 0.1 * span, top + 0.25 * span)
+        else:  # nothing to scale: no invented value axis
+            ax.set_yticks([])
+            ax.text(0.5, 0.5, f"no trial docked on every draw ({len(bad)} penalised)", transform=ax.transAxes,
+                    ha="center", va="center", fontsize=8, color="0.3")  # fmt: skip
+        if len(bad):  # along the panel's top edge (axes coordinates): a penalty is not a value
+            ax.plot(bad["number"], [1.0] * len(bad), "x", color="0.4", clip_on=False, label="penalised",
+                    transform=ax.get_xaxis_transform())  # fmt: skip
+        ax.set_xlim(-0.5, max(float(told["number"].max()) if len(told) else 0.0, 1.0) + 0.5)
         ax.set_ylabel(f"{metric} [N]" if metric and name == "force_N" else LABELS.get(name, name))
-        ax.legend(loc="best", fontsize=7)
+        ax.legend(loc="upper right", fontsize=7)
     axes[-1, 0].set_xlabel("trial")
     fig.suptitle(f"Optimisation history: {objective.name} (values over the draws)", fontsize=9)
     fig.tight_layout()
@@ -69,7 +75,14 @@ def plot_pareto(frame: pd.DataFrame, objective: Objective, out_dir: Path, metric
     x, y = objective.value_names
     good = frame[frame["feasible"].astype(bool) & frame[x].notna()]
     fig, ax = plt.subplots(figsize=(4.5, 3.4))
-    ax.plot(good[x], good[y], "o", ms=4, color="0.6", label="trial (every draw docked)")
+    penalised = int((~frame["feasible"].astype(bool)).sum())
+    if not len(good):  # nothing to plot: say so rather than an empty frame
+        ax.set_xticks([])
+        ax.set_yticks([])
+        ax.text(0.5, 0.5, f"no trial docked on every draw\n({penalised} penalised): no front yet",
+                transform=ax.transAxes, ha="center", va="center", fontsize=8, color="0.3")  # fmt: skip
+    else:
+        ax.plot(good[x], good[y], "o", ms=4, color="0.6", label="trial (every draw docked)")
     values = good[[x, y]].to_numpy()
     front = [i for i, p in enumerate(values) if not any((q <= p).all() and (q < p).any() for q in values)]
     if front:
@@ -84,11 +97,11 @@ def plot_pareto(frame: pd.DataFrame, objective: Objective, out_dir: Path, metric
                 xytext=(3, 3),
                 fontsize=6,
             )
-    penalised = int((~frame["feasible"].astype(bool)).sum())
     ax.set_xlabel(f"mean {metric} [N]" if metric and x == "force_N" else LABELS.get(x, x))
     ax.set_ylabel(LABELS.get(y, y))
     ax.set_title(f"Pareto front ({penalised} penalised trials not shown)", fontsize=9)
-    ax.legend(fontsize=7)
+    if len(good):
+        ax.legend(fontsize=7)
     fig.tight_layout()
     paths = _save(fig, Path(out_dir), PARETO)
     plt.close(fig)

@@ -20,7 +20,7 @@ The jobs are ordinary runs (the sweep callback prints a line per job and summari
 directory at the end). A set-up that cannot be used (a search space, objective or stored
 study; a search space reaching values a setting does not allow) is refused by the guard
 through :meth:`TuningSweeper.problems` before the sweep directory is created: one
-paragraph each, exit status 1, like every refusal of the command line.
+paragraph each, exit status 2, like every refusal of the command line.
 """
 
 from __future__ import annotations
@@ -379,7 +379,7 @@ class TuningSweeper(Sweeper):
         emit("\n".join(lines))
 
     def _refuse(self, exc: Exception) -> None:
-        """Refuse the study (exit status 1, the command line's refusal); nothing ran. The
+        """Refuse the study (exit status 2, the command line's refusal); nothing ran. The
         guard asked :meth:`problems` before anything was created: this is for a sweeper used
         without it (from Python)."""
         from compliant_docking.sweep.guard import refuse

@@ -80,6 +80,6 @@ def test_setting_that_does_not_pair_is_refused_naming_it():
 
 
 def test_the_command_refuses_a_missing_sweep_in_one_line(tmp_path, capsys):
-    assert main([str(tmp_path / "nowhere"), "--vary", "physics.timestep"]) == 1
+    assert main([str(tmp_path / "nowhere"), "--vary", "physics.timestep"]) == 2
     err = capsys.readouterr().err
     assert err.startswith("compliant_docking.results.convergence: ") and err.count("\n") == 1

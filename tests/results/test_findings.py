@@ -2,11 +2,15 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
+import pandas as pd
 import pytest
 from scipy.stats import wilcoxon
 
 from compliant_docking.results.findings import findings_markdown, main, pairs
+from tests.helpers import REPO_ROOT
 from tests.results.test_compare import frame
 
 
@@ -87,3 +91,27 @@ def test_the_sensitivity_section_puts_the_verdicts_and_cells_side_by_side(tmp_pa
     median = float(imp["filtered_peak_axial_force_N"].median())
     cell = next(line for line in text.splitlines() if line.startswith("| impedance"))
     assert "12/12 → 11/12" in cell and f"→ {median:.3g}" in cell
+
+
+def test_the_command_writes_beside_the_sweep_and_the_docs_only_when_asked(tmp_path, monkeypatch, capsys):
+    """Before: the README's command rewrote the tracked docs/findings.md, which flipped
+    ``git_dirty`` in every later run's provenance."""
+    from compliant_docking.results import findings
+
+    sweep = tmp_path / "sweep"
+    sweep.mkdir()
+    frame = pd.DataFrame({"robot": ["fr3"], "controller": ["hqp"], "trajectory": ["quintic"]})
+    monkeypatch.setattr(findings, "load_runs", lambda path: frame)
+    monkeypatch.setattr(findings, "findings_markdown", lambda *args: "# the finding\n")
+    written: dict = {}
+    monkeypatch.setattr(
+        "compliant_docking.run.files.atomic_write_text", lambda path, text: written.update({Path(path): text})
+    )
+    assert main([str(sweep)]) == 0
+    assert written == {sweep / "findings.md": "# the finding\n"}
+    mine = tmp_path / "mine" / "findings.md"
+    assert main([str(sweep), "--out", str(mine)]) == 0 and mine in written
+    capsys.readouterr()
+    assert main([str(sweep), "--out", "-"]) == 0 and capsys.readouterr().out == "# the finding\n\n"
+    assert main([str(sweep), "--docs"]) == 0
+    assert REPO_ROOT / "docs" / "findings.md" in written and len(written) == 3

@@ -233,7 +233,11 @@ def test_write_summary_and_report_command(tmp_path, capsys):
     back = pd.read_parquet(paths["summary.parquet"])
     assert len(back) == 2 and len(pd.read_csv(paths["summary.csv"])) == 2
     md = paths["summary.md"].read_text()
-    assert "## Comparison (Table 10)" in md and "| 1_b " in md and "bad / value" in md
+    assert (
+        "## Comparison: the docking metrics (Ren & Shan 2026, Table 10)" in md
+        and "| 1_b " in md
+        and "bad / value" in md
+    )
 
     assert report.main([str(tmp_path), "--no-figures"]) == 0
     out = capsys.readouterr().out

@@ -55,7 +55,7 @@ def test_a_docking_gate_failure_exits_3(tmp_path):
 
 def test_a_runtime_failure_exits_1(tmp_path):
     """A config that passes every check but cannot run (a socket out of the arm's reach):
-    status failed, exit 1. A value the checks refuse (a zero stroke) exits 1 before any
+    status failed, exit 1. A value the checks refuse (a zero stroke) exits 2 before any
     run directory exists (tests/sweep/test_guard.py)."""
     run_dir = tmp_path / "run"
     result = run_cli(f"hydra.run.dir={run_dir}", *SHORT, "target.pos=[3.0,0.0,0.2]")
@@ -63,5 +63,5 @@ def test_a_runtime_failure_exits_1(tmp_path):
     record = json.loads((run_dir / "metrics.json").read_text())
     assert record["status"] == "failed" and "inverse kinematics" in record["error"]
     refused = run_cli(f"hydra.run.dir={tmp_path / 'refused'}", *SHORT, "task.stroke=[0,0,0]")
-    assert refused.returncode == 1 and "task.stroke must be a non-zero vector" in refused.stderr
+    assert refused.returncode == 2 and "task.stroke must be a non-zero vector" in refused.stderr
     assert not (tmp_path / "refused").exists()

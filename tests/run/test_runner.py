@@ -81,7 +81,7 @@ def test_diverging_run_fails_cleanly(tmp_path):
 )
 def test_bad_config_fails_at_composition(tmp_path, capsys, override, message):
     code, err = cli_in_process(capsys, override, f"hydra.run.dir={tmp_path / 'run'}")
-    assert code == 1
+    assert code == 2
     assert message in err
     assert not (tmp_path / "run").exists()  # nothing written
 

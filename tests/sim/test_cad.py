@@ -282,7 +282,7 @@ def test_command_line_exports_converts_from_the_cache_and_exits_by_outcome(
     assert main([*argv, "--quick", "--keep", "0.5"]) == 0  # the fixture's options: a cache hit
     out = capsys.readouterr().out
     assert "(from the cache)" in out and f"tool.mjcf={copy / 'tool.xml'}" in out
-    assert main([str(tmp_path / "none.stl"), str(socket_stl), "--out", str(copy)]) == 1
+    assert main([str(tmp_path / "none.stl"), str(socket_stl), "--out", str(copy)]) == 2
     assert "no such file" in capsys.readouterr().err
     # CoACD's own pieces (cached), not rebuilt: the contact audit refuses them, saying where
     monkeypatch.setattr(cad, "conform", _as_coacd_made_them)
@@ -402,14 +402,14 @@ def test_command_line_refuses_an_unusable_option_before_writing(tmp_path, capsys
         "--out",
         str(tmp_path / "out"),
     ]
-    assert main([*argv, "--symmetry", "4", *args]) == 1
+    assert main([*argv, "--symmetry", "4", *args]) == 2
     err = capsys.readouterr().err
     assert message in err and "Traceback" not in err
     assert not (tmp_path / "out").exists()
 
 
 def test_export_refuses_a_keyed_plug_outside_its_range(tmp_path, capsys):
-    assert main(["--export-keyed", str(tmp_path / "cad"), "--sides", "2"]) == 1
+    assert main(["--export-keyed", str(tmp_path / "cad"), "--sides", "2"]) == 2
     err = capsys.readouterr().err
     assert err.startswith("error: --sides: ") and "sides must be an integer in [3, 12]; got 2" in err
     assert not (tmp_path / "cad").exists()

@@ -77,7 +77,7 @@ def test_a_sweep_whose_jobs_share_or_leave_its_directory_is_refused(
     code, err = cli_in_process(
         capsys, "-m", *TINY, f"hydra.sweep.dir={tmp_path / 'sweep'}", f"hydra.sweep.subdir={subdir}"
     )
-    assert code == 1 and message in err
+    assert code == 2 and message in err
     assert err.startswith("compliant-docking: the sweep is refused; nothing was run or written.")
     assert sorted(os.listdir(tmp_path)) == []
 
@@ -94,7 +94,7 @@ def test_a_run_into_a_used_run_directory_is_refused_and_mixes_nothing(tmp_path, 
     code, err = cli_in_process(
         capsys, "trajectory.duration=0.2", "task.progress=false", f"hydra.run.dir={used}"
     )
-    assert code == 1
+    assert code == 2
     assert (
         f"hydra.run.dir={used} is not empty (figures, metrics.json): a run writes into a new or empty" in err
     )
@@ -112,7 +112,7 @@ def test_a_sweep_into_a_used_sweep_directory_is_refused_and_keeps_it_resumable(t
     (used / "multirun.yaml").write_text("hydra: {overrides: {task: [controller.k=50]}}\n")
     before = _tree(used)
     code, err = cli_in_process(capsys, "-m", *TINY, f"hydra.sweep.dir={used}")
-    assert code == 1
+    assert code == 2
     assert f"hydra.sweep.dir={used} is not empty (0_controller.k=50, multirun.yaml)" in err
     assert f"to finish the sweep in it, run that sweep's command with resume={used}" in err
     assert _tree(used) == before
@@ -127,9 +127,9 @@ def test_an_explicit_directory_inside_a_sweep_is_refused(tmp_path, monkeypatch, 
     code, err = cli_in_process(
         capsys, "trajectory.duration=0.2", "task.progress=false", f"hydra.run.dir={sweep}/extra"
     )
-    assert code == 1 and f"hydra.run.dir={sweep}/extra lies inside the sweep directory {sweep}" in err
+    assert code == 2 and f"hydra.run.dir={sweep}/extra lies inside the sweep directory {sweep}" in err
     code, err = cli_in_process(capsys, "-m", *TINY, f"hydra.sweep.dir={sweep}/a/b")
-    assert code == 1 and "lies inside the sweep directory" in err
+    assert code == 2 and "lies inside the sweep directory" in err
     assert sorted(p.name for p in sweep.iterdir()) == ["multirun.yaml"]
 
 
@@ -197,7 +197,7 @@ def test_a_resume_that_would_move_its_jobs_is_refused_and_touches_nothing(
     (victim / "data.txt").write_text("keep me")
     sweep_before, parent_before = _tree(finished_sweep), _tree(finished_sweep.parent)
     result = _sweep(capsys, f"resume={finished_sweep}", *(m.format(victim=victim) for m in moves))
-    assert result.returncode == 1, result.stdout[-2000:] + result.stderr[-2000:]
+    assert result.returncode == 2, result.stdout[-2000:] + result.stderr[-2000:]
     assert result.stderr.startswith("resume: ") and message in result.stderr
     assert "Traceback" not in result.stderr
     assert (victim / "data.txt").read_text() == "keep me" and sorted(os.listdir(victim)) == ["data.txt"]
@@ -213,7 +213,7 @@ def test_a_resume_that_finds_job_directories_it_would_not_write_is_refused(finis
     (stray / ".hydra").mkdir(parents=True)
     before = _tree(copy)
     result = _sweep(capsys, f"resume={copy}")
-    assert result.returncode == 1
+    assert result.returncode == 2
     assert (
         "the sweep holds job directories that none of this command's jobs would write (7_controller.k=70)"
         in (result.stderr)
@@ -236,10 +236,7 @@ def test_a_job_name_too_long_for_a_file_name_is_shortened_with_a_hash():
     from compliant_docking.config.resolvers import NAME_BYTES, job_dir
 
     assert job_dir(3, "controller.k=50,robot=fr3") == "3_controller.k=50,robot=fr3"  # as Hydra named it
-    assert (
-        job_dir(0, "") == "0_"
-        and job_dir(2, "tool.mjcf=my_parts/tool.xml") == "2_tool.mjcf=my_parts/tool.xml"
-    )
+    assert job_dir(0, "") == "0_" and job_dir(2, "tool.mjcf=tool.xml") == "2_tool.mjcf=tool.xml"
     long = "robot.max_torque=[" + ",".join(["10.000000000001"] * 7) + "]," + "x" * 300
     name = job_dir(12, long)
     assert len(name.encode()) <= NAME_BYTES and "/" not in name
@@ -247,6 +244,25 @@ def test_a_job_name_too_long_for_a_file_name_is_shortened_with_a_hash():
     assert name != job_dir(13, long) and name != job_dir(12, long + "y")  # unique
     wide = job_dir(1, "task.note=" + "é" * 200)  # two bytes a character: cut between characters
     assert len(wide.encode()) <= NAME_BYTES and wide.encode().decode() == wide
+
+
+def test_a_file_path_in_a_job_name_is_its_folder_and_stem_one_directory_deep():
+    """Before: the README's CAD sweep named its jobs ``0_…,target.mjcf=assets/interfaces/
+    keyed_cad/target.xml,tool.mjcf=assets/…/tool.xml``, seven directories deep, and every job
+    was called ``tool.xml`` in the progress lines, summary.md and load_runs."""
+    from compliant_docking.config.resolvers import job_dir
+
+    cad = "assets/interfaces/keyed_cad"
+    name = job_dir(0, f"controller=hqp,robot=fr3,target.mjcf={cad}/target.xml,tool.mjcf={cad}/tool.xml")
+    assert name == "0_controller=hqp,robot=fr3,target.mjcf=keyed_cad-target,tool.mjcf=keyed_cad-tool"
+    assert job_dir(1, "tool.mjcf=/home/me/parts/plug.xml") == "1_tool.mjcf=parts-plug"
+    # two paths of one job that would read the same: a hash of each path tells them apart
+    twins = job_dir(2, "tool.mjcf=a/parts/plug.xml,target.mjcf=b/parts/plug.xml")
+    first, second = (part.split("=")[1] for part in twins.split(","))
+    assert "/" not in twins and first != second and first.startswith("parts-plug~")
+    assert twins == job_dir(2, "tool.mjcf=a/parts/plug.xml,target.mjcf=b/parts/plug.xml")  # stable
+    # values with Hydra's own syntax are left as Hydra wrote them
+    assert job_dir(3, "controller.m=tag(log,interval(1,10))") == "3_controller.m=tag(log,interval(1,10))"
 
 
 def test_the_sweep_job_directory_template_shortens_long_names():

@@ -67,7 +67,7 @@ def test_a_bad_input_is_refused_before_a_run_directory_is_written(
     monkeypatch.delenv("DISPLAY", raising=False)
     monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
     code, err = cli_in_process(capsys, *args, *SHORT_RUN)
-    assert code == 1
+    assert code == 2
     assert message in err
     assert err.startswith("compliant-docking: the configuration is refused; nothing was run or written.")
     assert "Traceback" not in err and "n/a" not in err
@@ -114,7 +114,7 @@ def test_what_only_the_robot_the_planner_or_the_files_tell_is_refused_up_front(
     per-joint lists against the robot's joints, the files the run loads."""
     monkeypatch.chdir(tmp_path)
     code, err = cli_in_process(capsys, *args, "task.progress=false")
-    assert code == 1
+    assert code == 2
     assert message in err
     assert err.startswith("compliant-docking: the configuration is refused; nothing was run or written.")
     assert "Traceback" not in err
@@ -143,7 +143,7 @@ def test_what_only_the_robot_the_planner_or_the_files_tell_is_refused_up_front(
 def test_a_bad_sweep_is_refused_before_anything_is_created(tmp_path, monkeypatch, capsys, args, message):
     monkeypatch.chdir(tmp_path)
     code, err = cli_in_process(capsys, "-m", *args, *SHORT_SWEEP)
-    assert code == 1
+    assert code == 2
     assert message in err
     assert err.startswith("compliant-docking: the sweep is refused; nothing was run or written.")
     assert "resume" not in err and "Traceback" not in err
@@ -165,7 +165,7 @@ def test_a_sweep_whose_planner_refuses_a_job_is_refused_up_front(
 ):
     monkeypatch.chdir(tmp_path)
     code, err = cli_in_process(capsys, "-m", *args, "task.progress=false")
-    assert code == 1 and message in err and "[job 1: " in err
+    assert code == 2 and message in err and "[job 1: " in err
     assert err.startswith("compliant-docking: the sweep is refused; nothing was run or written.")
     assert not (tmp_path / "runs").exists()
 
@@ -178,7 +178,7 @@ def test_a_slurm_sweep_without_slurm_is_refused_before_anything_is_created(tmp_p
     code, err = cli_in_process(
         capsys, "-m", "controller.k=50,60", "hydra/launcher=submitit_slurm", *SHORT_SWEEP
     )
-    assert code == 1
+    assert code == 2
     assert err.startswith("compliant-docking: the sweep is refused; nothing was run or written.")
     assert "hydra/launcher=submitit_slurm needs Slurm, and this machine has no sbatch on its PATH" in err
     assert not (tmp_path / "runs").exists()
@@ -191,21 +191,21 @@ def test_an_unwritable_directory_is_refused_before_anything_runs(tmp_path, monke
     code, err = cli_in_process(
         capsys, "-m", "controller.k=40,50", f"hydra.sweep.dir={blocker}/sweep", *SHORT_SWEEP
     )
-    assert code == 1 and f"hydra.sweep.dir={blocker}/sweep: {blocker} is not a directory" in err
+    assert code == 2 and f"hydra.sweep.dir={blocker}/sweep: {blocker} is not a directory" in err
     assert "resume" not in err
     code, err = cli_in_process(
         capsys, "-m", "controller.k=40,50", "hydra.sweep.dir=/proc/sweep", *SHORT_SWEEP
     )
-    assert code == 1 and "hydra.sweep.dir=/proc/sweep: cannot write in /proc" in err
+    assert code == 2 and "hydra.sweep.dir=/proc/sweep: cannot write in /proc" in err
     code, err = cli_in_process(capsys, "hydra.run.dir=/proc/run", *SHORT_RUN)
-    assert code == 1 and "hydra.run.dir=/proc/run: cannot write in /proc" in err
+    assert code == 2 and "hydra.run.dir=/proc/run: cannot write in /proc" in err
     if os.geteuid() != 0:  # permission bits bind everyone but root
         locked = tmp_path / "locked"
         locked.mkdir(mode=0o555)
         code, err = cli_in_process(
             capsys, "-m", "controller.k=40,50", f"hydra.sweep.dir={locked}/sweep", *SHORT_SWEEP
         )
-        assert code == 1 and "cannot write in" in err
+        assert code == 2 and "cannot write in" in err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a_file"] + (["locked"] if os.geteuid() else [])
 
 

@@ -261,7 +261,7 @@ def test_a_resume_with_other_overrides_is_refused_and_touches_nothing(killed):
         for a in sweep_command(killed.sweep_dir, f"resume={killed.sweep_dir}")
     ]
     result = subprocess.run(other, cwd=REPO_ROOT, capture_output=True, text=True, timeout=300, env=_env())
-    assert result.returncode == 1  # refused, like every refusal of the command line
+    assert result.returncode == 2  # refused, like every refusal of the command line
     assert "was started with the overrides" in result.stderr
     assert (saved.stat().st_mtime_ns, saved.read_bytes()) == before
 

@@ -59,7 +59,9 @@ def test_assess_keeps_a_sound_job_and_says_why_it_reruns_another(finished_job, t
         assert kept is None and reason in why, (reason, why)
     job = _copy(source, tmp_path / "rows")
     record = json.loads((job / "metrics.json").read_text())
-    (job / "metrics.json").write_text(json.dumps({**record, "steps": record["steps"] + 1}))
+    (job / "metrics.json").write_text(
+        json.dumps({**record, "steps": record["steps"] + 1, "timeseries_rows": record["steps"] + 1})
+    )
     assert resume.assess(cfg, job)[1] == "timeseries.parquet has 2000 rows, metrics.json says 2001 steps"
     changed = make_cfg("trajectory.duration=1", "task.settle_time=1.5", "task.progress=false")
     kept, why = resume.assess(changed, _copy(source, tmp_path / "changed"))

@@ -189,7 +189,7 @@ def test_a_rerun_with_other_draws_is_refused_before_any_job(sweep_dir, capsys, n
     sweeper.draws = {"task.misalignment.seed": "range(3)"}
     with SweepSession.open(), pytest.raises(SystemExit) as stop:
         sweeper.sweep([])
-    assert stop.value.code == 1
+    assert stop.value.code == 2
     err = capsys.readouterr().err
     assert err.startswith("compliant-docking: the tuning study is refused; nothing was run or written.")
     assert "started with another definition (draws:" in err

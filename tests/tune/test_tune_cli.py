@@ -86,7 +86,7 @@ def test_a_search_space_outside_a_settings_range_is_refused_before_anything(tmp_
     """Before: every trial's jobs failed the run's check (96 failed jobs), and the study exited 0."""
     monkeypatch.chdir(tmp_path)
     code, err = cli_in_process(capsys, "-m", *SHORT_TUNE, "controller.k=interval(-100,1000)")
-    assert code == 1
+    assert code == 2
     assert err.startswith("compliant-docking: the sweep is refused; nothing was run or written.")
     assert "controller.k must be a finite number >= 0 N/m; got -100.0." in err
     assert (
@@ -105,7 +105,7 @@ def test_a_corrupt_study_is_refused_clearly_and_left_as_it_is(tmp_path, monkeypa
     (study_dir / "study.db").write_bytes(content)
     (study_dir / "multirun.yaml").write_text("hydra:\n  sweeper:\n    study_name: fr3_impedance\n")
     code, err = cli_in_process(capsys, "-m", *SHORT_TUNE)
-    assert code == 1
+    assert code == 2
     assert f"the study storage {study_dir / 'study.db'} cannot be read (" in err
     assert "move it away to start the study afresh" in err
     assert (study_dir / "study.db").read_bytes() == content
@@ -119,7 +119,7 @@ def test_a_study_directory_holding_something_else_is_refused(tmp_path, monkeypat
     other.mkdir(parents=True)
     (other / "notes.txt").write_text("mine")
     code, err = cli_in_process(capsys, "-m", *SHORT_TUNE)
-    assert code == 1 and "hydra.sweep.dir=runs/tune/fr3_impedance holds something other than" in err
+    assert code == 2 and "hydra.sweep.dir=runs/tune/fr3_impedance holds something other than" in err
     assert sorted(p.name for p in other.parent.iterdir()) == ["fr3_impedance"]
 
 

@@ -54,7 +54,7 @@ def test_sweep_with_viewer_is_refused_before_anything_runs(tmp_path, capsys):
         f"hydra.sweep.dir={sweep}",
         "hydra.callbacks.sweep.figures=false",
     )
-    assert code == 1
+    assert code == 2
     assert "viewer=true is refused in a sweep (-m)" in err
     assert "resume" not in out + err and "Traceback" not in err
     assert not sweep.exists()
