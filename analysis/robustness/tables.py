@@ -28,7 +28,7 @@ CONDITION_NAMES = {
 }
 METRICS = [
     ("filtered_peak_axial_force_N", "filtered peak force [N]", 1.0),
-    ("seated_time_s", "docking time [s]", 1.0),
+    ("docking_time_s", "docking time [s]", 1.0),  # seated and staying seated (run_directory.md)
 ]
 
 
