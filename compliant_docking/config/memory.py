@@ -24,12 +24,18 @@ def _get(cfg: DictConfig, key: str) -> Any:
 def run_length(cfg: DictConfig) -> tuple[float, str] | None:
     """The run's simulated time and where it comes from, when the config alone gives it:
     ``task.duration``, or the planner's ``trajectory.duration`` + ``task.settle_time``
-    (other planners' durations follow from the scene: the simulation checks them)."""
+    (other planners' durations follow from the scene: the simulation checks them), + the
+    longest a held reference may extend it (``task.max_hold``, with ``trajectory.lead_limit``)."""
     duration = _get(cfg, "task.duration")
     if duration is not None:
         return float(duration), f"task.duration = {duration:g} s"
     planned, settle = _get(cfg, "trajectory.duration"), _get(cfg, "task.settle_time")
     if isinstance(planned, (int, float)) and isinstance(settle, (int, float)):
+        hold = _get(cfg, "task.max_hold") if _get(cfg, "trajectory.lead_limit") is not None else None
+        if isinstance(hold, (int, float)) and hold > 0:
+            return float(planned + settle + hold), (
+                f"trajectory.duration + task.settle_time + task.max_hold = {planned:g} + {settle:g} + {hold:g} s"
+            )
         return float(planned + settle), (
             f"trajectory.duration + task.settle_time = {planned:g} + {settle:g} s"
         )

@@ -371,6 +371,8 @@ class TaskConfig:
     press_duration: float = positive(unit="s")  # how long that press takes (within settle_time) [s]
     duration: Optional[float] = positive(unit="s")  # run length [s]; null: planner duration + settle_time
     settle_time: float = at_least(0.0, unit="s")  # run time after the trajectory ends [s]
+    # the longest a held (bounded) reference extends the run, so the settle time stays whole [s]
+    max_hold: float = at_least(0.0, unit="s")
     steady_window: float = positive(unit="s")  # window at the end for the steady-state metrics [s]
     strike_window: float = positive(
         unit="s"

@@ -60,13 +60,14 @@ _PLANNED: dict[str, float | str] = {}
 
 
 def _run_duration(cfg: DictConfig) -> float | str:
-    """The run's length [s] with the planner of ``cfg``, or why the planner refuses the task."""
+    """The run's length [s] with the planner of ``cfg``, or why the planner refuses the task;
+    with a bounded reference, the longest it may be extended (``task.max_hold``) included."""
     import json
 
     from omegaconf import OmegaConf
 
     from compliant_docking.sim.simulate import plan
-    from compliant_docking.sim.task import nominal_waypoints, run_duration
+    from compliant_docking.sim.task import hold_extension, nominal_waypoints, run_duration
 
     # what the planner and the run's length depend on (the task's waypoints up to a rigid motion)
     key = json.dumps(
@@ -75,7 +76,7 @@ def _run_duration(cfg: DictConfig) -> float | str:
             for node in (
                 cfg.trajectory,
                 cfg.target.get("name"),
-                *(cfg.task.get(k) for k in ("stroke", "init_pos", "duration", "settle_time")),
+                *(cfg.task.get(k) for k in ("stroke", "init_pos", "duration", "settle_time", "max_hold")),
                 *(cfg.task.get(k) for k in ("insertion_overshoot", "press_duration")),
             )
         ],
@@ -84,7 +85,8 @@ def _run_duration(cfg: DictConfig) -> float | str:
     )
     if key not in _PLANNED:
         try:
-            _PLANNED[key] = run_duration(cfg, plan(cfg, nominal_waypoints(cfg)))[0]
+            planner = plan(cfg, nominal_waypoints(cfg))
+            _PLANNED[key] = run_duration(cfg, planner)[0] + hold_extension(cfg, planner)
         except ValueError as exc:
             _PLANNED[key] = _sentence(exc)
     return _PLANNED[key]

@@ -141,7 +141,18 @@ def execute(
             record["loop_wall_time_s"] = sim.loop_wall_time or None
             record.update(sim.controller.diagnostics())
             if sim.lead is not None:
-                record.update(sim.lead.diagnostics(sim.scene.model.opt.timestep))
+                dt = sim.scene.model.opt.timestep
+                record.update(sim.lead.diagnostics(dt))
+                # the run extended by the held time (task.max_hold caps it)
+                record["run_extended_s"] = max(steps - sim.planned_steps, 0) * dt
+                record["run_extension_capped"] = sim.extension_capped
+                if sim.extension_capped:
+                    short = (sim.planned_steps + sim.lead.held_steps - sim.n_steps) * dt
+                    record["run_notes"] = (
+                        f"the reference was held {sim.lead.held_steps * dt:.3f} s, longer than "
+                        f"task.max_hold = {cfg.task.max_hold:g} s extends the run: the settle time "
+                        f"after the planner's end is {short:.3f} s shorter than task.settle_time"
+                    )
         if episode is not None and episode.fields is not None:
             record.update(episode.fields(record))
         if interrupted is None and cfg.get("render") is not None and cfg.render.name != "none":
@@ -155,6 +166,8 @@ def execute(
         record.update(provenance.collect(cfg, started_at=started_at))  # versions, git, config hash
         record = rundir.consistent(record)  # a job that did not finish never counts as docked
         summary = format_summary(record, cfg) + f"\n  run directory: {display_path(out_dir)}"
+        if record.get("run_notes"):  # a held reference cut the settle time short
+            summary += f"\n  note: {record['run_notes']}"
         if "video_error" in record:  # render=video: the video, or why there is none
             from compliant_docking.viz.render import summary_line
 

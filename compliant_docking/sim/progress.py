@@ -50,7 +50,7 @@ class RunProgress:
         if self.bar:
             if k % self.every == 0 and k:
                 line = self.line(k, time.perf_counter() - self.start)
-                filled = int(BAR_WIDTH * k / self.n_steps)
+                filled = min(int(BAR_WIDTH * k / self.n_steps), BAR_WIDTH)  # a held reference runs on
                 rest = line.split(" · ", 1)[1]
                 sys.stderr.write(
                     f"\r  simulating {k * self.dt:.1f}/{self.n_steps * self.dt:.1f} s "

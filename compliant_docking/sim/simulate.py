@@ -37,7 +37,7 @@ from compliant_docking.sim.models import ArmModel
 from compliant_docking.sim.progress import RunProgress
 from compliant_docking.sim.scene import Scene, build_scene
 from compliant_docking.sim.sensor import Sensing, sensing, wrench_reader
-from compliant_docking.sim.task import run_duration, task_waypoints
+from compliant_docking.sim.task import hold_extension, run_duration, task_waypoints
 from compliant_docking.sim.telemetry import Telemetry
 
 #: joint speed regarded as an exploding state [rad/s]
@@ -74,6 +74,9 @@ class Simulation:
     # the bounded reference (planning/lead.py) choosing reference's rows; None: open loop
     lead: LeadLimit | None = None
     steps_done: int = 0  # steps simulated so far: the index of the next one
+    # steps allocated past the planned run for a held reference (task.max_hold): the run
+    # lasts n_steps − extra_steps + the held steps, at most n_steps
+    extra_steps: int = 0
     # the wrench handed to the controller at the last step (start() makes it)
     wrench: np.ndarray = field(default_factory=lambda: np.zeros(6), init=False)
     _loop: tuple | None = field(default=None, init=False, repr=False)  # the loop's bindings
@@ -85,12 +88,34 @@ class Simulation:
         return self.telemetry.count * self.scene.model.opt.timestep >= self.planner.duration - 1e-9
 
     @property
+    def planned_steps(self) -> int:
+        """The run's steps without a held reference: the planner's duration + settle time."""
+        return self.n_steps - self.extra_steps
+
+    @property
+    def end(self) -> int:
+        """The run's last step + 1: the planned steps extended by every step the bounded
+        reference held the planner (so the settle time after the planner's end is whole),
+        at most ``n_steps``."""
+        if self.lead is None or not self.extra_steps:
+            return self.n_steps
+        return min(self.planned_steps + self.lead.held_steps, self.n_steps)
+
+    @property
+    def extension_capped(self) -> bool:
+        """Whether the reference was held longer than ``task.max_hold`` extends the run (a
+        fixed ``task.duration`` is never extended, so never capped)."""
+        if self.lead is None or self.cfg.task.duration is not None:
+            return False
+        return self.planned_steps + self.lead.held_steps > self.n_steps
+
+    @property
     def finished(self) -> bool:
-        """Whether all ``n_steps`` steps are simulated."""
-        return self.steps_done >= self.n_steps
+        """Whether all the run's steps (:attr:`end`) are simulated."""
+        return self.steps_done >= self.end
 
     def run(self, progress: bool = False, on_step: Callable[[int], None] | None = None) -> Telemetry:
-        """Simulate ``n_steps`` steps; raises :class:`Diverged` when the physics blows up.
+        """Simulate the run's steps (:attr:`end`); raises :class:`Diverged` when the physics blows up.
 
         The same loop as :meth:`start` then :meth:`advance` until the end (the Gymnasium
         environment advances it a policy step at a time). ``on_step(k)``, if given, is
@@ -121,7 +146,7 @@ class Simulation:
             wrench = np.zeros(6)
             read_wrench = self.sensing.reader(self.scene, data, measured, wrench)
             update = self.sensing.updater(arm)
-        reporter = RunProgress(self.n_steps, dt, enabled=progress)
+        reporter = RunProgress(self.planned_steps, dt, enabled=progress)
         start = time.perf_counter()
         # The planner's work is part of the loop's time: its table of every step first.
         self.reference = self.planner.table(np.arange(self.n_steps) * dt)
@@ -155,7 +180,8 @@ class Simulation:
         return self.wrench
 
     def advance(self, n: int) -> int:
-        """Simulate the next ``n`` steps (fewer at the end of the run); returns how many.
+        """Simulate the next ``n`` steps (fewer at the end of the run, :attr:`end`, which a
+        held reference moves on while they run); returns how many.
 
         Raises :class:`Diverged` when the physics blows up. The torque clip is MuJoCo's
         actuator ``ctrlrange`` (set to ±robot.max_torque by the scene), so the loop writes
@@ -166,7 +192,8 @@ class Simulation:
         if self._loop is None:
             raise RuntimeError("Simulation.advance needs Simulation.start() first")
         first = self.steps_done
-        last = min(first + max(int(n), 0), self.n_steps)
+        goal = first + max(int(n), 0)
+        last = min(goal, self.end)
         (
             (read_wrench, reporter, on_step, ref, row, wrench, measured),
             (model, data, arm, update, log, dt),
@@ -177,35 +204,40 @@ class Simulation:
         get_state, state_spec = mujoco.mj_getState, STATE_LOGGED
         mj_step, compute = mujoco.mj_step, self.controller.compute
         start = time.perf_counter()
-        for k in range(first, last):
-            t = k * dt
-            update(qpos, qvel)
-            row(k, ref)
-            read_wrench(k)
-            tau = compute(t, arm, ref, wrench)
-            ctrl[:] = tau
-            get_state(model, data, log_state[k], state_spec)  # [q, v, command]
-            log_w[k] = measured
-            log_contacts[k] = data.ncon
-            mj_step(model, data)
-            if on_step is not None:
-                on_step(k)
-            if k % CHECK_EVERY == 0:
-                log.count = self.steps_done = k + 1
-                if (
-                    bad_qacc.number
-                    or not np.isfinite(qvel).all()
-                    or np.abs(qvel).max() > EXPLODING_SPEED
-                    or not np.isfinite(tau).all()
-                ):
-                    raise Diverged(_divergence_reason(t, qvel, tau, bad_qacc.number))
-                reporter.update(k)
-        log.count = self.steps_done = last
+        k0 = first
+        while True:  # one pass without a held reference; a held one moves the end on
+            for k in range(k0, last):
+                t = k * dt
+                update(qpos, qvel)
+                row(k, ref)
+                read_wrench(k)
+                tau = compute(t, arm, ref, wrench)
+                ctrl[:] = tau
+                get_state(model, data, log_state[k], state_spec)  # [q, v, command]
+                log_w[k] = measured
+                log_contacts[k] = data.ncon
+                mj_step(model, data)
+                if on_step is not None:
+                    on_step(k)
+                if k % CHECK_EVERY == 0:
+                    log.count = self.steps_done = k + 1
+                    if (
+                        bad_qacc.number
+                        or not np.isfinite(qvel).all()
+                        or np.abs(qvel).max() > EXPLODING_SPEED
+                        or not np.isfinite(tau).all()
+                    ):
+                        raise Diverged(_divergence_reason(t, qvel, tau, bad_qacc.number))
+                    reporter.update(k)
+            log.count = self.steps_done = last
+            k0, last = last, min(goal, self.end)
+            if last <= k0:
+                break
         self._elapsed += time.perf_counter() - start
         self.loop_wall_time = self._elapsed
-        if last == self.n_steps:
+        if self.steps_done >= self.end:
             reporter.done()
-        return last - first
+        return self.steps_done - first
 
 
 def _divergence_reason(t: float, qvel: np.ndarray, tau: np.ndarray, bad_qacc: int) -> str:
@@ -275,7 +307,9 @@ def prepare(cfg: DictConfig) -> Simulation:
     model.actuator_ctrlrange[:] = np.column_stack([-limits, limits])  # the software clip
     data = mujoco.MjData(model)
     start_held(model, data, q0)
-    n_steps = int(round(duration / model.opt.timestep))
+    planned_steps = int(round(duration / model.opt.timestep))
+    extra_steps = int(round(hold_extension(cfg, planner) / model.opt.timestep))
+    n_steps = planned_steps + extra_steps  # allocated; the run ends at Simulation.end
     too_large = memory_problem(cfg, n_steps=n_steps)  # before the logs are allocated
     if too_large:
         raise ValueError(too_large)
@@ -307,6 +341,7 @@ def prepare(cfg: DictConfig) -> Simulation:
         controller=controller,
         duration=duration,
         n_steps=n_steps,
+        extra_steps=extra_steps,
         telemetry=Telemetry(n_steps, nv, model.opt.timestep),
         notes=notes,
         arm=believed,

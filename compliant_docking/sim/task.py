@@ -115,3 +115,15 @@ def run_duration(cfg: DictConfig, planner: Planner) -> tuple[float, list[str]]:
             f"({planner.duration:.3g} s): the run is incomplete"
         )
     return duration, notes
+
+
+def hold_extension(cfg: DictConfig, planner: Planner) -> float:
+    """The longest a held reference may extend the run [s]: ``task.max_hold`` when the
+    planner's reference is bounded (``trajectory.lead_limit``) and the run length follows
+    the planner (``task.duration`` null); else 0 (a fixed run length is kept as given)."""
+    if planner.lead_limit is None or cfg.task.duration is not None:
+        return 0.0
+    max_hold = float(cfg.task.get("max_hold", 0.0))
+    if not max_hold >= 0.0:
+        raise ValueError(f"task.max_hold must be >= 0 s, got {max_hold}")
+    return max_hold

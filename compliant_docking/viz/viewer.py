@@ -90,7 +90,7 @@ class RealTimeViewer:
             launch = mujoco.viewer.launch_passive
         self.model, self.data = sim.scene.model, sim.data
         self.dt = float(self.model.opt.timestep)
-        self.last = int(sim.n_steps) - 1
+        self.sim = sim  # its last step (Simulation.end − 1) moves on while a reference is held
         self.every = max(1, round(FRAME_PERIOD / self.dt))
         self.clock, self.sleep = clock, sleep
         self.handle = launch(self.model, self.data, show_left_ui=False, show_right_ui=False)
@@ -113,7 +113,8 @@ class RealTimeViewer:
 
     def __call__(self, k: int) -> None:
         """After step k: every ``every`` steps (and at the last), sync and wait for the clock."""
-        if not self.open or (k % self.every and k != self.last):
+        last = k == self.sim.end - 1
+        if not self.open or (k % self.every and not last):
             return
         if self.start is None:  # wall time at which the simulated time was 0
             self.start = self.clock() - (k + 1) * self.dt
@@ -124,7 +125,7 @@ class RealTimeViewer:
         ahead = self.start + (k + 1) * self.dt - self.clock()
         if ahead > 0.0:
             self.sleep(ahead)
-        if k == self.last:
+        if last:
             self.close()
 
     def close(self) -> None:

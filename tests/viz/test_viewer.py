@@ -96,7 +96,9 @@ def _fake_sim(n_steps: int):
         '<mujoco><option timestep="0.001"/><worldbody><camera name="track_cam"/>'
         '<body><joint/><geom size=".1"/></body></worldbody></mujoco>'
     )
-    return SimpleNamespace(scene=SimpleNamespace(model=model), data=mujoco.MjData(model), n_steps=n_steps)
+    return SimpleNamespace(
+        scene=SimpleNamespace(model=model), data=mujoco.MjData(model), n_steps=n_steps, end=n_steps
+    )
 
 
 def test_viewer_is_paced_to_real_time_and_closes_at_the_end():
