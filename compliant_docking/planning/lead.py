@@ -32,15 +32,14 @@ class LeadLimit:
     def __init__(
         self, planned: ReferenceTable, live: ReferenceTable, axial: np.ndarray, axis: np.ndarray, limit: float
     ):
-        if not limit > 0.0:
-            raise ValueError(
-                f"trajectory.lead_limit must be > 0 m (null: the open-loop reference), got {limit}"
-            )
+        checked = checked_lead_limit(limit)
+        if checked is None:
+            raise ValueError("LeadLimit needs a trajectory.lead_limit > 0 m (null means no LeadLimit)")
         self.planned, self.live = planned, live
         self.axial = np.asarray(axial, dtype=float).tolist()  # Python floats: a per-step lookup
         u = np.asarray(axis, dtype=float)
         self.axis = tuple((u / np.linalg.norm(u)).tolist())
-        self.limit = float(limit)
+        self.limit = checked
         self.index = -1  # the planned row in use (none before the first step)
         self.compliant = False  # lateral axes follow the plug (from the first held step on)
         self.held_steps = 0
