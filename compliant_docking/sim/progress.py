@@ -49,12 +49,11 @@ class RunProgress:
             return
         if self.bar:
             if k % self.every == 0 and k:
-                line = self.line(k, time.perf_counter() - self.start)
+                pace = self.pace(k, time.perf_counter() - self.start)
                 filled = min(int(BAR_WIDTH * k / self.n_steps), BAR_WIDTH)  # a held reference runs on
-                rest = line.split(" · ", 1)[1]
                 sys.stderr.write(
                     f"\r  simulating {k * self.dt:.1f}/{self.n_steps * self.dt:.1f} s "
-                    f"|{'█' * filled}{' ' * (BAR_WIDTH - filled)}| {rest}   "
+                    f"|{'█' * filled}{' ' * (BAR_WIDTH - filled)}| {pace}   "
                 )
                 sys.stderr.flush()
         elif self.marks and k >= self.marks[0]:
@@ -66,16 +65,22 @@ class RunProgress:
     def line(self, k: int, elapsed: float) -> str:
         """The plain progress line after step ``k``, ``elapsed`` wall seconds in."""
         done, total = k * self.dt, self.n_steps * self.dt
+        return (
+            f"  simulated {done:.1f} / {total:.1f} s ({100 * k / self.n_steps:.0f} %) · "
+            f"{self.pace(k, elapsed)}"
+        )
+
+    def pace(self, k: int, elapsed: float) -> str:
+        """``3.1× real time · about 4 s left`` after step ``k``, ``elapsed`` wall seconds in:
+        the end of the plain line and of the terminal's bar."""
+        done, total = k * self.dt, self.n_steps * self.dt
         rate = done / max(elapsed, 1e-9)
         if rate <= 0:
             left = "time left unknown"
         else:
             seconds = (total - done) / rate
             left = f"about {duration_text(seconds)} left" if seconds >= 0.5 else "under a second left"
-        return (
-            f"  simulated {done:.1f} / {total:.1f} s ({100 * k / self.n_steps:.0f} %) · "
-            f"{rate:.1f}× real time · {left}"
-        )
+        return f"{rate:.1f}× real time · {left}"
 
     def done(self) -> None:
         if self.bar:
