@@ -92,11 +92,15 @@ class Misalignment:
         }
 
 
+def stream_rng(seed: int, stream: int) -> np.random.Generator:
+    """The random stream ``SeedSequence([seed, stream])``: every drawn quantity of a run
+    (misalignment, model error, sensor, contact) has its own stream."""
+    return np.random.default_rng(np.random.SeedSequence([int(seed), stream]))
+
+
 def uniform_draw(seed: int, stream: int, low: float, high: float) -> float:
-    """One uniform draw in [low, high] from the random stream ``SeedSequence([seed, stream])``:
-    every drawn quantity of a run (misalignment, model error, contact) has its own stream."""
-    rng = np.random.default_rng(np.random.SeedSequence([int(seed), stream]))
-    return low + (high - low) * float(rng.random())
+    """One uniform draw in [low, high] from the random stream of ``seed`` and ``stream``."""
+    return low + (high - low) * float(stream_rng(seed, stream).random())
 
 
 def empty_record() -> dict:

@@ -32,6 +32,7 @@ import mujoco
 import numpy as np
 import pinocchio as pin
 
+from compliant_docking.sim.misalignment import stream_rng
 from compliant_docking.sim.models import ArmModel, RigidTool
 from compliant_docking.sim.scene import Scene
 
@@ -84,10 +85,6 @@ def wrench_reader(
     return read
 
 
-def _stream(seed: int, stream: int) -> np.random.Generator:
-    return np.random.default_rng(np.random.SeedSequence([int(seed), stream]))
-
-
 @dataclass(frozen=True)
 class SensorModel:
     """The realised settings of the ``sensor`` group for a loop of time step ``dt``."""
@@ -135,7 +132,7 @@ class SensorModel:
         seed = int(settings.get("seed", 0))
         spread = np.repeat([float(settings.force_bias_std_N), float(settings.moment_bias_std_Nm)], 3)
         if np.any(spread):
-            bias = bias + spread * _stream(seed, STREAM_BIAS).standard_normal(6)
+            bias = bias + spread * stream_rng(seed, STREAM_BIAS).standard_normal(6)
         return cls(
             period=period,
             alpha=alpha,
@@ -166,7 +163,7 @@ class SensedWrench:
 
     def __init__(self, model: SensorModel, n_steps: int, source: np.ndarray, out: np.ndarray):
         self.model, self.source, self.out = model, source, out
-        self.noise = _stream(model.seed, STREAM_NOISE).standard_normal((max(n_steps, 1), 6)) * model.noise
+        self.noise = stream_rng(model.seed, STREAM_NOISE).standard_normal((max(n_steps, 1), 6)) * model.noise
         self.raw = np.zeros(6)  # u
         self.filtered = np.zeros(6)  # y
         self.sample = np.zeros(6)  # the held sample s
@@ -204,8 +201,8 @@ class Sensing:
         self.model, self.n_steps, self.believed_tool = model, n_steps, believed_tool
         self.q = np.zeros(nv)
         self.v = np.zeros(nv)
-        self.q_noise = _stream(model.seed, STREAM_Q).standard_normal((n_steps, nv)) * model.q_noise
-        self.v_noise = _stream(model.seed, STREAM_V).standard_normal((n_steps, nv)) * model.v_noise
+        self.q_noise = stream_rng(model.seed, STREAM_Q).standard_normal((n_steps, nv)) * model.q_noise
+        self.v_noise = stream_rng(model.seed, STREAM_V).standard_normal((n_steps, nv)) * model.v_noise
         self.count = 0
         self.wrench: SensedWrench | None = None
 
