@@ -105,6 +105,15 @@ class DynamicsConfig:
     seed: int = integers(0, 2**63 - 1)  # the draws (default: task.misalignment.seed)
 
 
+def sample_period(rate_hz: float, dt: float) -> int | None:
+    """The steps between two F/T samples at ``rate_hz`` in a loop of time step ``dt`` [s];
+    None unless that is a whole number of steps (at least one)."""
+    period = 1.0 / (rate_hz * dt)
+    if period < 1.0 - 1e-9 or abs(period - round(period)) > 1e-6 * period:
+        return None
+    return int(round(period))
+
+
 def _ranges(node: Any, group: str) -> list[str]:
     found = []
     for key in node:
@@ -156,8 +165,7 @@ def problems(cfg: Any) -> list[str]:
         return found
     rate, cutoff, delay = sensor.get("rate_hz"), sensor.get("cutoff_hz"), sensor.get("delay_s")
     if isinstance(rate, (int, float)) and rate > 0:
-        period = 1.0 / (rate * dt)
-        if period < 1.0 - 1e-9 or abs(period - round(period)) > 1e-6 * period:
+        if sample_period(rate, dt) is None:
             found.append(
                 f"sensor.rate_hz must make the sample period a whole number of physics.timestep = {dt:g} s "
                 f"(at most {1.0 / dt:g} Hz, e.g. {1.0 / dt:g}, {0.5 / dt:g}, {0.25 / dt:g}); got {show(rate)}."

@@ -32,6 +32,7 @@ import mujoco
 import numpy as np
 import pinocchio as pin
 
+from compliant_docking.config.robustness import sample_period
 from compliant_docking.sim.misalignment import stream_rng
 from compliant_docking.sim.models import ArmModel, RigidTool
 from compliant_docking.sim.scene import Scene
@@ -120,8 +121,8 @@ class SensorModel:
         drawn with the seed. Raises ValueError naming the setting for values the loop
         cannot realise (the config check refuses them first)."""
         rate, cutoff = settings.get("rate_hz"), settings.get("cutoff_hz")
-        period = 1 if rate is None else int(round(1.0 / (float(rate) * dt)))
-        if period < 1 or (rate is not None and abs(period * float(rate) * dt - 1.0) > 1e-6):
+        period = 1 if rate is None else sample_period(float(rate), dt)
+        if period is None:
             raise ValueError(
                 f"sensor.rate_hz must make the sample period a whole number of steps of {dt:g} s; got {rate}"
             )
