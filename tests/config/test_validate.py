@@ -217,6 +217,21 @@ def test_legitimate_appends_and_presets_pass(overrides):
         (("task.press_duration=5",), "task.press_duration must be at most task.settle_time"),
         (("task.misalignment.x=0.001", "task.misalignment.x_range=[0,0.002]"), "are both set"),
         (("task.misalignment.x_range=[0.002,0.001]",), "low <= high"),
+        (
+            ("sensor=wrist_ft", "sensor.rate_hz=300"),
+            "sensor.rate_hz must make the sample period a whole number",
+        ),
+        (
+            ("sensor=wrist_ft", "sensor.cutoff_hz=600"),
+            "sensor.cutoff_hz must be at most the Nyquist frequency",
+        ),
+        (
+            ("sensor=wrist_ft", "sensor.delay_s=0.0015"),
+            "sensor.delay_s must be a whole number of physics.timestep",
+        ),
+        (("model_error=drawn", "model_error.link_mass_scale_range=[1.02,0.98]"), "low <= high"),
+        (("model_error=drawn", "model_error.link_mass_scale=1.1"), "are both set"),
+        (("dynamics=randomised", "target=none", "trajectory=hold"), "need a socket"),
         (("target.geometry.radial_clearance=0.02",), "target.geometry.radial_clearance must be > 0 and <"),
         (("tool.geometry.chamfer_length=0.02",), "tool.geometry.chamfer_length must be at most"),
         (("tool.geometry.length=0.02",), "tool.geometry.length must be longer than target.geometry"),
