@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from compliant_docking.evaluation.contact import first_contact_state
 from compliant_docking.sim.telemetry import FORCE, MOMENT, ORI_ERROR, axial_force
 
 MAX_POINTS = 1200
@@ -162,12 +163,12 @@ def _min_span(ax, span: float) -> None:
 
 
 def first_contact_time(ts: pd.DataFrame) -> float | None:
-    """Time of the state whose physics step first found a contact (row k−1 of the first row
-    with contacts > 0: docs/run_directory.md), or None without contact."""
+    """The metrics' ``first_contact_time_s`` read from a saved series: the time of
+    :func:`~compliant_docking.evaluation.contact.first_contact_state`, or None without contact."""
     if "contacts" not in ts or not len(ts):
         return None
-    touching = np.flatnonzero(ts["contacts"].to_numpy() > 0)
-    return float(ts["t"].iloc[max(int(touching[0]) - 1, 0)]) if touching.size else None
+    state = first_contact_state(ts["contacts"].to_numpy())
+    return None if state is None else float(ts["t"].iloc[state])
 
 
 @dataclass(frozen=True)

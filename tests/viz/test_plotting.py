@@ -115,3 +115,22 @@ def test_no_offset_notation_on_the_axes(tmp_path, drawn):
     x_axis = drawn["tcp_tracking"].axes[0]
     low, high = x_axis.get_ylim()
     assert high - low >= 2e-3 - 1e-12  # a held coordinate gets a 2 mm span, not µm ticks
+
+
+@pytest.mark.parametrize("first_row", [0, 1, 1234, None])
+def test_the_first_contact_mark_is_the_metrics_first_contact_time(first_row):
+    """The figure marks first contact where the metrics put ``first_contact_time_s``: the
+    state before the first row with contacts (row 0 when that is the first), none without."""
+    import pinocchio as pin
+
+    from compliant_docking.evaluation.contact import contact_metrics
+
+    ts = series(contact_at=None)
+    ts["vx"], ts["vy"], ts["vz"] = 0.0, 0.0, 0.0
+    if first_row is not None:
+        ts.loc[first_row:, "contacts"] = 1
+    metric = contact_metrics(ts, pin.SE3.Identity(), steady_window=1.0, strike_window=0.1)[
+        "first_contact_time_s"
+    ]
+    expected = None if first_row is None else ts["t"].iloc[max(first_row - 1, 0)]
+    assert plotting.first_contact_time(ts) == metric == expected
