@@ -49,6 +49,8 @@ PROVENANCE = "compliant_docking/run/provenance.py"
 RUNNER = "compliant_docking/run/runner.py"
 TABLES = "compliant_docking/results/tables.py"
 MISALIGNMENT = "compliant_docking/sim/misalignment.py"
+BOUNDARIES = "compliant_docking/evaluation/map_boundaries.py"
+LEAD = "compliant_docking/planning/lead.py"
 TASK_CONF = "conf/task/docking.yaml"
 
 METRIC_TESTS = ("tests/evaluation/test_docking.py", "tests/run/test_runner.py")
@@ -61,6 +63,9 @@ CONTACT_TESTS = ("tests/evaluation/test_contact.py",)
 FILTERED_TESTS = ("tests/evaluation/test_filtered_peak.py", "tests/evaluation/test_docking.py")
 FILTERED_RUN_TESTS = ("tests/sim/test_misalignment.py",)
 MISALIGNMENT_TESTS = ("tests/sim/test_misalignment.py",)
+DOCKING_TIME_TESTS = ("tests/evaluation/test_docking_time.py", "tests/evaluation/test_docking.py")
+BOUNDARY_TESTS = ("tests/evaluation/test_map_boundaries.py",)
+LEAD_TESTS = ("tests/planning/test_lead.py",)
 TRACKING_TESTS = ("tests/evaluation/test_tracking_gate.py",)
 SENSOR_TESTS = ("tests/sim/test_sensor.py", "tests/control/test_impedance.py")
 LAW_TESTS = (
@@ -1251,6 +1256,169 @@ MUTATIONS = (
         'totals["success rate"] = totals["docked"] / (totals["jobs"] - totals["failed"])',
         "success rate over the jobs that did not fail",
         RESULTS_TESTS,
+    ),
+    # ------------------------------------- the motion apart from the press, docking time
+    Mutation(
+        "M18",
+        DOCKING,
+        "return np.arange(n) < (n if state is None else state)",
+        "return np.arange(n) <= (n if state is None else state)",
+        "the approach includes the first contact's state row",
+        DOCKING_TIME_TESTS,
+    ),
+    Mutation(
+        "M19",
+        DOCKING,
+        'state = first_contact_state(ts["contacts"].to_numpy()) if "contacts" in ts else None',
+        "state = None",
+        "the approach runs to the end of the series (press included)",
+        DOCKING_TIME_TESTS,
+    ),
+    Mutation(
+        "M20",
+        DOCKING,
+        "press_depth_m=-np.mean((pos_err @ axis)[steady])",
+        "press_depth_m=np.mean((pos_err @ axis)[steady])",
+        "press depth with the wrong sign (out of the socket positive)",
+        DOCKING_TIME_TESTS,
+    ),
+    Mutation(
+        "M21",
+        DOCKING,
+        "press_depth_m=-np.mean((pos_err @ axis)[steady])",
+        "press_depth_m=-np.mean(pos_err @ axis)",
+        "press depth averaged over the whole run, not the steady window",
+        DOCKING_TIME_TESTS,
+    ),
+    Mutation(
+        "M22",
+        DOCKING,
+        "return max(stays_from, first_contact)",
+        "return stays_from",
+        "docking time may come before the first contact (the planner's arrival)",
+        DOCKING_TIME_TESTS,
+    ),
+    Mutation(
+        "M23",
+        DOCKING,
+        "stays_from = int(outside[-1]) + 1 if outside.size else 0",
+        "stays_from = int(outside[0]) + 1 if outside.size else 0",
+        "docking time after the first excursion, not the last",
+        DOCKING_TIME_TESTS,
+    ),
+    Mutation(
+        "M24",
+        DOCKING,
+        "if first_contact is None or not seated.size or not seated[-1]:",
+        "if first_contact is None or not seated.size:",
+        "a plug that left the seat again still counts as docked",
+        DOCKING_TIME_TESTS,
+    ),
+    Mutation(
+        "M25",
+        DOCKING,
+        "inside = (depth <= depth_tolerance) & (lateral <= lateral_tolerance)",
+        "inside = depth <= depth_tolerance",
+        "docked without the lateral tolerance",
+        DOCKING_TIME_TESTS,
+    ),
+    Mutation(
+        "M26",
+        DOCKING,
+        "docking_time_after_contact_s=None if docked is None else float(t[docked] - t[contact]),",
+        "docking_time_after_contact_s=None if docked is None else float(t[docked] - t[0]),",
+        "docking time after contact measured from the start",
+        DOCKING_TIME_TESTS,
+    ),
+    # ---------------------------------------- the jamming map's theoretical boundaries
+    Mutation(
+        "B1",
+        BOUNDARIES,
+        "centre, half = -height * math.sin(theta), capture * math.cos(theta)",
+        "centre, half = height * math.sin(theta), capture * math.cos(theta)",
+        "capture band shifted the wrong way with the tilt",
+        BOUNDARY_TESTS,
+    ),
+    Mutation(
+        "B2",
+        BOUNDARIES,
+        "centre, half = -height * math.sin(theta), capture * math.cos(theta)",
+        "centre, half = -height * math.sin(theta), capture",
+        "capture half-width not foreshortened by cos θ",
+        BOUNDARY_TESTS,
+    ),
+    Mutation(
+        "B3",
+        BOUNDARIES,
+        "math.degrees((big_r - r) / big_r / peg.friction) if peg.friction > 0 else math.inf",
+        "math.degrees((big_r - r) / r / peg.friction) if peg.friction > 0 else math.inf",
+        "Whitney's clearance ratio c over the plug's radius, not the bore's",
+        BOUNDARY_TESTS,
+    ),
+    Mutation(
+        "B4",
+        BOUNDARIES,
+        "two_point_tilt(big_r, r, peg.bore_depth - peg.chamfer_length)",
+        "two_point_tilt(big_r, r, peg.bore_depth)",
+        "two-point line at the bore's full depth (the chamfer counted as cylinder)",
+        BOUNDARY_TESTS,
+    ),
+    Mutation(
+        "B5",
+        BOUNDARIES,
+        "        if tilt_deg > self.wedging_tilt_deg:\n"
+        '            return "wedged"\n'
+        "        if tilt_deg > self.two_point_tilt_deg:\n"
+        '            return "two-point"\n',
+        "        if tilt_deg > self.two_point_tilt_deg:\n"
+        '            return "two-point"\n'
+        "        if tilt_deg > self.wedging_tilt_deg:\n"
+        '            return "wedged"\n',
+        "wedging never reported (two-point checked first)",
+        BOUNDARY_TESTS,
+    ),
+    # ------------------------------------------------------------ the bounded reference
+    Mutation(
+        "L1",
+        LEAD,
+        "if ahead > self.limit and self.axial[j] > self.axial[j - 1]:",
+        "if ahead > 2.0 * self.limit and self.axial[j] > self.axial[j - 1]:",
+        "the reference may lead by twice the limit",
+        LEAD_TESTS,
+    ),
+    Mutation(
+        "L2",
+        LEAD,
+        "if ahead > self.limit and self.axial[j] > self.axial[j - 1]:",
+        "if ahead > self.limit:",
+        "the reference also held where the plan does not advance along the axis",
+        LEAD_TESTS,
+    ),
+    Mutation(
+        "L3",
+        LEAD,
+        "            live.pos[k] = (t0 + gap * u0, t1 + gap * u1, t2 + gap * u2)",
+        "            live.pos[k] = planned.pos[j]",
+        "held reference stiff laterally (not following the plug)",
+        LEAD_TESTS,
+    ),
+    Mutation(
+        "L4",
+        LEAD,
+        """            live.twist[k] = 0.0
+            live.accel[k] = 0.0""",
+        """            live.twist[k] = planned.twist[j]
+            live.accel[k] = planned.accel[j]""",
+        "a held reference keeps its planned velocity",
+        LEAD_TESTS,
+    ),
+    Mutation(
+        "L5",
+        LEAD,
+        "if not float(limit) > 0.0:",
+        "if not float(limit) >= 0.0:",
+        "a lead limit of 0 m accepted",
+        LEAD_TESTS,
     ),
     Mutation(
         "R1",

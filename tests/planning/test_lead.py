@@ -62,6 +62,19 @@ def test_the_time_scaling_is_the_identity_while_the_plug_follows():
     assert lead.held_steps == 0 and lead.diagnostics(DT)["reference_max_delay_s"] == 0.0
 
 
+def test_a_plan_that_does_not_advance_along_the_axis_is_never_held():
+    """Holding only helps while the plan moves into the socket: a sideways plan (constant
+    axial coordinate) runs row for row even with the plug stuck 10 mm behind it."""
+    sideways = pin.SE3(np.eye(3), START.translation + np.array([0.0, 0.05, 0.0]))
+    p = QuinticPlanner(Waypoints(START, sideways, AXIS), duration=1.0, name="quintic", lead_limit=0.004)
+    table = p.table(np.arange(1500) * DT)
+    planned = copy_table(table)
+    lead = bounded(p, table, AXIS)
+    stuck = START.translation - 0.010 * AXIS  # 10 mm behind the plan along the axis
+    steps(lead, table, lambda k: stuck, 1500)
+    assert np.array_equal(table.pos, planned.pos) and lead.held_steps == 0
+
+
 def test_the_press_is_not_counted_as_lead():
     """A plug at the seat: the press home moves the reference 5 mm past it, unbounded."""
     p = PressHome(planner(0.002), 0.005 * AXIS, 0.5)
