@@ -66,6 +66,7 @@ MISALIGNMENT_TESTS = ("tests/sim/test_misalignment.py",)
 DOCKING_TIME_TESTS = ("tests/evaluation/test_docking_time.py", "tests/evaluation/test_docking.py")
 BOUNDARY_TESTS = ("tests/evaluation/test_map_boundaries.py",)
 LEAD_TESTS = ("tests/planning/test_lead.py",)
+YIELD_TESTS = ("tests/control/test_base.py", "tests/control/test_friction_push.py")
 TRACKING_TESTS = ("tests/evaluation/test_tracking_gate.py",)
 SENSOR_TESTS = ("tests/sim/test_sensor.py", "tests/control/test_impedance.py")
 LAW_TESTS = (
@@ -1419,6 +1420,31 @@ MUTATIONS = (
         "if not float(limit) >= 0.0:",
         "a lead limit of 0 m accepted",
         LEAD_TESTS,
+    ),
+    # ------------------------------------------- the yielding friction feed-forward
+    Mutation(
+        "Y1",
+        KERNEL_BLOCKS,
+        "if mode == 3 and v[i] * y < 0.0:",
+        "if mode == 3 and v[i] * y > 0.0:",
+        "yielding fades the feed-forward on joints moving with it, not against it",
+        YIELD_TESTS,
+    ),
+    Mutation(
+        "Y2",
+        KERNEL_BLOCKS,
+        "y *= 1.0 - min(abs(v[i]) / YIELD_SPEED, 1.0)",
+        "y *= 1.0 - 0.5 * min(abs(v[i]) / YIELD_SPEED, 1.0)",
+        "yielding only halves the feed-forward against fast motion",
+        YIELD_TESTS,
+    ),
+    Mutation(
+        "Y3",
+        KERNEL_BLOCKS,
+        "YIELD_SPEED = 0.02",
+        "YIELD_SPEED = 0.2",
+        "the feed-forward is off only from 0.2 rad/s",
+        YIELD_TESTS,
     ),
     Mutation(
         "R1",
