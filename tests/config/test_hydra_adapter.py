@@ -1,4 +1,5 @@
-"""The composition memos (config/compose_cache.py) give the config Hydra gives without them."""
+"""The Hydra adapter (config/hydra_adapter.py): what it relies on is still in the installed
+Hydra, and the composition memos give the config Hydra gives without them."""
 
 from __future__ import annotations
 
@@ -11,7 +12,7 @@ from hydra.types import RunMode
 from omegaconf import DictConfig, ListConfig, OmegaConf
 
 from compliant_docking import CONF_DIR
-from compliant_docking.config import compose_cache, register_schemas
+from compliant_docking.config import hydra_adapter, register_schemas
 
 #: group choices, value overrides, presets, nested and list values, an added key
 OVERRIDE_SETS = (
@@ -58,18 +59,18 @@ def compose_all(sets) -> dict:
 @pytest.fixture
 def without_memos():
     """Hydra's own composition for the test; the memos back afterwards."""
-    compose_cache.uninstall()
+    hydra_adapter.uninstall()
     yield
-    compose_cache.install()
+    hydra_adapter.install()
 
 
 def test_memoized_compositions_equal_hydras_own(without_memos):
     plain = compose_all(OVERRIDE_SETS)
-    compose_cache.install()
+    hydra_adapter.install()
     first = compose_all(OVERRIDE_SETS)  # misses, then hits within the passes
     again = compose_all(OVERRIDE_SETS)  # all hits
     assert first == plain and again == plain
-    hits, misses = compose_cache.stats["composed"]
+    hits, misses = hydra_adapter.stats["composed"]
     assert hits >= len(plain) and misses <= len(OVERRIDE_SETS)  # the memo served most
 
 
@@ -84,7 +85,7 @@ def test_memoized_compositions_equal_hydras_own(without_memos):
 )
 def test_a_wrong_override_is_refused_as_without_the_memos(without_memos, overrides):
     plain = compose_all([overrides])
-    compose_cache.install()
+    hydra_adapter.install()
     assert compose_all([overrides]) == compose_all([overrides]) == plain
     assert all(isinstance(v, str) for v in plain.values())  # refused, in both modes
 
@@ -93,7 +94,7 @@ def test_an_edited_config_file_is_read_again(tmp_path):
     conf = tmp_path / "conf"
     shutil.copytree(CONF_DIR, conf)
     register_schemas()
-    compose_cache.install()
+    hydra_adapter.install()
 
     def k() -> float:
         GlobalHydra.instance().clear()
