@@ -90,10 +90,11 @@ class CommandLine:
             print_help(argv)
             return 0
         argv = progress.verbose_argv(argv)  # -v: the launchers' per-job launch lines too
-        try:
-            argv = resume.translate_argv(argv)  # resume=<sweep dir> → Hydra overrides
-        except resume.ResumeError as exc:
-            return resume.fail(exc)
+        if any(arg.startswith("resume=") for arg in argv):
+            try:
+                argv = resume.translate_argv(argv)  # resume=<sweep dir> → Hydra overrides
+            except resume.ResumeError as exc:
+                return resume.fail(exc)
         register_schemas()
         launchers.register_schemas(ConfigStore.instance())  # hydra/launcher=submitit_*
         # Ctrl-C, SIGTERM, SIGHUP: a run records itself as interrupted (run/runner.py); a
