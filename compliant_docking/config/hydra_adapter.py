@@ -18,6 +18,9 @@ what changed — Hydra is pinned below 1.4 in pyproject.toml for them):
 3. **The basic sweeper's split of a sweep into jobs** (:func:`split_sweep`):
    ``hydra._internal.core_plugins.basic_sweeper.BasicSweeper.split_arguments``, so the
    guard checks (and the tuning sweeper draws) exactly the jobs Hydra will launch.
+4. **An entry removed from the ConfigStore** (:func:`unstore`): its ``repo`` dict, which
+   the store offers no method to delete from; a plugin's presets that our config files
+   of the same names replace (sweep/launchers.py).
 
 What follows is the memo of item 1.
 
@@ -304,6 +307,14 @@ class Compositions:
         return found if found is not None else self.compose(master_config, sweep_overrides)
 
 
+def unstore(cs: Any, group: str, name: str) -> None:
+    """Remove the entry ``name`` of ``group`` (``a/b``) from the ConfigStore ``cs``, if there."""
+    node = cs.repo
+    for part in group.split("/"):
+        node = node.get(part, {})
+    node.pop(f"{name}.yaml", None)
+
+
 # --------------------------------------------------------------------------- the check
 def problems() -> list[str]:
     """What the installed Hydra no longer offers as this module relies on it (one sentence
@@ -365,7 +376,8 @@ def problems() -> list[str]:
     if check is not None and "config_loader.load_sweep_config(" not in inspect.getsource(check):
         found.append(
             _changed(
-                "BasicSweeper.validate_batch_is_legal no longer composes through its config loader's load_sweep_config; used for reusing a sweep's compositions"
+                "BasicSweeper.validate_batch_is_legal no longer composes through its config loader's "
+                "load_sweep_config; used for reusing a sweep's compositions"
             )
         )
     try:
@@ -380,4 +392,9 @@ def problems() -> list[str]:
         found.append(
             _changed(f"hydra._internal.defaults_list.DefaultsList: {exc}; used for the composition memos")
         )
+    from hydra.core.config_store import ConfigStore
+
+    repo = getattr(ConfigStore.instance(), "repo", None)
+    if not isinstance(repo, dict) or not isinstance(repo.get("hydra"), dict):
+        found.append(_changed("ConfigStore.repo is not a dict of groups; used for removing a stored entry"))
     return found
