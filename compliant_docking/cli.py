@@ -5,7 +5,7 @@ Exit status (one table for every command: compliant_docking/exit_codes.py,
 docs/exit_codes.md): 0 the run docked (or passed its tracking gate), 1 the run failed
 (error or divergence), 2 the command was refused before anything ran (a bad key or value,
 a directory that is not new, a resume or tuning study that cannot continue:
-compliant_docking/sweep/guard.py), 3 the run finished but its gate did not pass (not
+compliant_docking/run/guard.py, sweep/guard.py), 3 the run finished but its gate did not pass (not
 docked), 130 / 143 / 129 stopped by Ctrl-C / SIGTERM / SIGHUP (a single run records status
 "interrupted" with its time series so far: compliant_docking/run/interrupt.py).
 A sweep (``-m``): 1 if any job failed (or its worker died), else 0 — jobs that did not
@@ -27,6 +27,7 @@ import os
 import re
 import signal
 import sys
+import traceback
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -37,17 +38,17 @@ from hydra.types import RunMode
 from omegaconf import DictConfig, OmegaConf
 
 from compliant_docking import CONF_DIR, exit_codes
-from compliant_docking.config import compose_cache, register_schemas
+from compliant_docking.config import hydra_adapter, register_schemas
 from compliant_docking.run import interrupt
+from compliant_docking.run.directories import release_empty
+from compliant_docking.run.guard import Refused, refuse
 from compliant_docking.sweep import launchers, progress, resume
-from compliant_docking.sweep.directories import release_empty, sweep_dir_of
-from compliant_docking.sweep.guard import Refused, refuse
 from compliant_docking.sweep.session import SweepSession
 
 # Hydra composes each job's config in the launching process and again in the worker that
-# runs it: memoize what the compositions share (config/compose_cache.py). At import, so
+# runs it: memoize what the compositions share (config/hydra_adapter.py). At import, so
 # the sweep's workers, which import this module to run the task, have it too.
-compose_cache.install()
+hydra_adapter.install()
 
 
 class CommandLine:
@@ -64,8 +65,14 @@ class CommandLine:
 
         hydra_cfg = HydraConfig.get()
         out_dir = Path(hydra_cfg.runtime.output_dir)
+        sweep = hydra_cfg.mode == RunMode.MULTIRUN
+        if not sweep:  # one run: its summary on the console, its figures
+            self.records.append(execute(cfg, out_dir, figures=wanted(cfg, sweep=False), echo=True))
+            return None
         note = None
         if resume.resuming(hydra_cfg):  # resume=<sweep dir>: keep a finished job untouched
+            from compliant_docking.sweep.directories import sweep_dir_of
+
             kept, why = resume.assess(cfg, out_dir)
             if kept is not None:
                 self.records.append(kept)
@@ -74,8 +81,7 @@ class CommandLine:
             resume.prepare_rerun(cfg, out_dir, sweep_dir_of(hydra_cfg))
         # in a sweep, each job prints one progress line (SweepCallback), not its summary,
         # and draws no figures unless `figures=true` (report --runs draws them later)
-        sweep = hydra_cfg.mode == RunMode.MULTIRUN
-        self.records.append(execute(cfg, out_dir, figures=wanted(cfg, sweep=sweep), echo=not sweep))
+        self.records.append(execute(cfg, out_dir, figures=wanted(cfg, sweep=True), echo=False))
         return note
 
     def run(self, argv: list[str]) -> int:
@@ -84,10 +90,11 @@ class CommandLine:
             print_help(argv)
             return 0
         argv = progress.verbose_argv(argv)  # -v: the launchers' per-job launch lines too
-        try:
-            argv = resume.translate_argv(argv)  # resume=<sweep dir> → Hydra overrides
-        except resume.ResumeError as exc:
-            return resume.fail(exc)
+        if any(arg.startswith("resume=") for arg in argv):
+            try:
+                argv = resume.translate_argv(argv)  # resume=<sweep dir> → Hydra overrides
+            except resume.ResumeError as exc:
+                return resume.fail(exc)
         register_schemas()
         launchers.register_schemas(ConfigStore.instance())  # hydra/launcher=submitit_*
         # Ctrl-C, SIGTERM, SIGHUP: a run records itself as interrupted (run/runner.py); a
@@ -95,7 +102,11 @@ class CommandLine:
         app = hydra.main(version_base="1.3", config_path=str(CONF_DIR), config_name="config")(self.task)
         saved, sys.argv[1:] = sys.argv[1:], argv  # Hydra parses sys.argv
         interrupt.forget()
-        with SweepSession.open() as session, _handled(interrupt.SIGNALS, interrupt.raise_stop):
+        with (
+            SweepSession.open() as session,
+            _handled(interrupt.SIGNALS, interrupt.raise_stop),
+            _hydra_config_kept(),
+        ):
             try:
                 with _errors_reported():
                     app()
@@ -148,48 +159,70 @@ def _handled(signums: tuple[int, ...], handler) -> Iterator[None]:
 
 @contextlib.contextmanager
 def _errors_reported() -> Iterator[None]:
-    """Errors Hydra's error reporter (``hydra._internal.utils.run_and_report``) would
-    print its own way, reported ours: a config that does not compose (an unknown key, a
-    wrong type: one paragraph naming the key and the nearest valid keys, never a schema
-    class, and no hint to append the key with ``+``), a sweep whose worker process
-    died (joblib's ``TerminatedWorkerError``: one line instead of a traceback; the aborted
-    sweep's summary then says which jobs were lost), and an error raised after a stop
-    signal (the signal's exception cut some library's code short, e.g. OmegaConf's between
-    the jobs of an in-process sweep): the stop, without a traceback. Hydra calls its reporter by module
-    lookup, so it is wrapped for this command only.
+    """Errors Hydra's error reporter would print its own way, reported ours: a config that
+    does not compose (an unknown key, a wrong type: one paragraph naming the key and the
+    nearest valid keys, never a schema class, and no hint to append the key with ``+``),
+    a sweep whose worker process died (joblib's ``TerminatedWorkerError``: one line
+    instead of a traceback; the aborted sweep's summary then says which jobs were lost),
+    and an error raised after a stop signal (the signal's exception cut some library's
+    code short, e.g. OmegaConf's between the jobs of an in-process sweep): the stop,
+    without a traceback.
+
+    Hydra hands an error to the caller of ``hydra.main`` instead of reporting it when
+    ``HYDRA_FULL_ERROR=1`` (its documented switch): set for the command only. Any other
+    error is reported as Hydra reports it — a Hydra error in one line (and its OmegaConf
+    cause), else the traceback — and exits with status 1; with ``HYDRA_FULL_ERROR=1`` set
+    by the user it propagates, as with Hydra.
     """
-    from hydra._internal import utils as hydra_utils
-    from hydra.errors import ConfigCompositionException
+    from hydra.errors import CompactHydraException, ConfigCompositionException
+    from omegaconf.errors import OmegaConfBaseException
 
     from compliant_docking.config.validate import composition_problem
 
-    report = hydra_utils.run_and_report
+    full_error = os.environ.get("HYDRA_FULL_ERROR")
+    os.environ["HYDRA_FULL_ERROR"] = "1"
+    try:
+        yield
+    except ConfigCompositionException as exc:
+        raise refuse("the configuration is refused", [composition_problem(exc)]) from None
+    except Exception as exc:
+        stopped_by = interrupt.received()
+        if stopped_by is not None:  # an error of code the signal cut short: the stop it is
+            raise interrupt.Stopped(stopped_by) from None
+        if type(exc).__name__ in ("TerminatedWorkerError", "BrokenProcessPool"):
+            first = (str(exc).strip().splitlines() or [type(exc).__name__])[0]
+            codes = re.search(r"exit codes of the workers are \{([^}]*)\}", str(exc))
+            detail = f" (exit codes {codes.group(1)})" if codes else ""
+            print(f"sweep: a worker process died{detail}: {first}", file=sys.stderr, flush=True)
+            raise SystemExit(exit_codes.FAILED) from None
+        if full_error == "1":
+            raise
+        if isinstance(exc, CompactHydraException):
+            print(exc, file=sys.stderr)
+            if isinstance(exc.__cause__, OmegaConfBaseException):
+                print(exc.__cause__, file=sys.stderr)
+        else:
+            traceback.print_exc()
+        raise SystemExit(exit_codes.FAILED) from None
+    finally:
+        if full_error is None:
+            os.environ.pop("HYDRA_FULL_ERROR", None)
+        else:
+            os.environ["HYDRA_FULL_ERROR"] = full_error
 
-    def run_and_report(func):
-        def guarded():
-            try:
-                return func()
-            except ConfigCompositionException as exc:
-                raise refuse("the configuration is refused", [composition_problem(exc)]) from None
-            except Exception as exc:
-                stopped_by = interrupt.received()
-                if stopped_by is not None:  # an error of code the signal cut short: the stop it is
-                    raise interrupt.Stopped(stopped_by) from None
-                if type(exc).__name__ not in ("TerminatedWorkerError", "BrokenProcessPool"):
-                    raise
-                first = (str(exc).strip().splitlines() or [type(exc).__name__])[0]
-                codes = re.search(r"exit codes of the workers are \{([^}]*)\}", str(exc))
-                detail = f" (exit codes {codes.group(1)})" if codes else ""
-                print(f"sweep: a worker process died{detail}: {first}", file=sys.stderr, flush=True)
-                raise SystemExit(exit_codes.FAILED) from None
 
-        return report(guarded)
-
-    hydra_utils.run_and_report = run_and_report
+@contextlib.contextmanager
+def _hydra_config_kept() -> Iterator[None]:
+    """Hydra's process-wide ``HydraConfig`` as it was before the command: Hydra leaves the
+    last job's config set in it after the command returns, and a run started later in the
+    same process through the Python API (a test, a notebook) would record this command's
+    overrides and choices as its own (run.runner.job_identity)."""
+    hydra_config = HydraConfig.instance()
+    saved = hydra_config.cfg
     try:
         yield
     finally:
-        hydra_utils.run_and_report = report
+        hydra_config.cfg = saved
 
 
 # --------------------------------------------------------------------------- --help

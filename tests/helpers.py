@@ -50,19 +50,12 @@ def cli_in_process_output(capsys, *args: str) -> tuple[int, str, str]:
     sweep on Hydra's basic launcher (``hydra/launcher=basic``: its jobs run here too). What
     is about the process itself (the console script, signals, worker processes, a fresh
     interpreter) keeps a subprocess (:func:`run_cli`)."""
-    from hydra.core.hydra_config import HydraConfig
-
     from compliant_docking.cli import main
 
     try:
         code = main(list(args))
     except SystemExit as exc:
         code = exc.code if isinstance(exc.code, int) else 1
-    finally:
-        # Hydra leaves the job's runtime config set in its process-wide HydraConfig after the
-        # run returns; a later run in this worker through the Python API would otherwise
-        # record this command's overrides and choices as its own (runner.job_identity)
-        HydraConfig.instance().cfg = None
     captured = capsys.readouterr()
     return code, captured.out, captured.err
 

@@ -159,10 +159,10 @@ def test_each_compliant_docking_command_composes_and_passes_the_checks():
     from hydra.core.global_hydra import GlobalHydra
 
     from compliant_docking import CONF_DIR
-    from compliant_docking.config import compose_cache, register_schemas
+    from compliant_docking.config import hydra_adapter, register_schemas
     from compliant_docking.config.validate import check
 
-    compose_cache.install()  # what the command line's compositions share, memoized
+    hydra_adapter.install()  # what the command line's compositions share, memoized
     register_schemas()
     GlobalHydra.instance().clear()
     cli = [c for c in commands() if kind(c) == "cli" and "-sc" not in c and "--help" not in c]

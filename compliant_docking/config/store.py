@@ -12,9 +12,9 @@ from hydra.core.config_store import ConfigStore
 from omegaconf import DictConfig
 
 from compliant_docking import CONF_DIR
-from compliant_docking.config.compose_cache import install as install_compose_cache
 from compliant_docking.config.env import EnvConfig
 from compliant_docking.config.geometry import ContactParams, PlugGeometry, SocketGeometry
+from compliant_docking.config.hydra_adapter import install as install_compose_cache
 from compliant_docking.config.keyed import KeyedPlugGeometry, KeyedSocketGeometry
 from compliant_docking.config.robustness import DynamicsConfig, ModelErrorConfig, SensorConfig
 from compliant_docking.config.schemas import (

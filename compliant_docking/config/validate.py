@@ -23,7 +23,7 @@ class name), what is allowed and the value given:
   check with its exact step count before it allocates anything).
 
 The command line runs :func:`validate` before Hydra writes a run or sweep directory
-(compliant_docking/sweep/guard.py), and :func:`compliant_docking.run.runner.execute`
+(compliant_docking/run/guard.py, sweep/guard.py), and :func:`compliant_docking.run.runner.execute`
 runs it first for runs started from Python. What needs the robot's model or the planner
 (per-joint lists against the robot's joints, the planner's own refusals, the memory of a
 run whose length follows from the planner) is checked by

@@ -38,10 +38,11 @@ def register_schemas(cs) -> None:
         from hydra_plugins.hydra_submitit_launcher import config as submitit_config
     except ImportError:
         return
-    plugin_group = cs.repo.get("hydra", {}).get("launcher", {})
+    from compliant_docking.config.hydra_adapter import unstore
+
     for name, schema in SUBMITIT_PRESETS.items():
         cs.store(group="schema/launcher", name=name, node=getattr(submitit_config, schema))
-        plugin_group.pop(f"{name}.yaml", None)  # conf/hydra/launcher/<name>.yaml replaces it
+        unstore(cs, "hydra/launcher", name)  # conf/hydra/launcher/<name>.yaml replaces it
 
 
 def _target(launcher_cfg: Any) -> str:

@@ -53,8 +53,7 @@ class PoolLauncher(Launcher):
         self.config: Any = None
         self.task_function: Any = None
         self.hydra_context: Any = None
-        self.composed: dict[tuple[str, ...], Any] = {}
-        self._compose: Any = None
+        self.compositions: Any = None
 
     def workers(self) -> int:
         """The number of worker processes: ``n_jobs``, negative counting back from the cores."""
@@ -64,37 +63,23 @@ class PoolLauncher(Launcher):
         return max(cpu_count() + 1 + n_jobs, 1) if n_jobs < 0 else n_jobs
 
     def setup(self, *, hydra_context, task_function, config) -> None:
+        from compliant_docking.config.hydra_adapter import share_compositions
+
         self.config, self.task_function, self.hydra_context = config, task_function, hydra_context
-        self._keep_compositions()
+        # what the sweeper's check composes is kept and sent to the jobs (launch)
+        self.compositions = share_compositions(hydra_context.config_loader)
+        self.compositions.keep_for(config)
         self._start_workers()
-
-    def _keep_compositions(self) -> None:
-        """Keep what the sweeper's check composes (the loader's ``load_sweep_config``),
-        so :meth:`launch` sends those configs instead of having the workers compose again."""
-        loader = self.hydra_context.config_loader
-        original = loader.load_sweep_config  # the guard's lookup of the configs it composed, if any
-
-        def load_sweep_config(master_config, sweep_overrides):
-            cfg = original(master_config, sweep_overrides)
-            if master_config is self.config:
-                self.composed[tuple(sweep_overrides)] = cfg
-            return cfg
-
-        loader.load_sweep_config = load_sweep_config  # an instance attribute, removed in launch
-        self._compose = original
 
     def _executor(self):
         """loky's reusable executor for :meth:`workers` processes: the running one, or a new
         one when there is none or it was stopped (a dead worker, an interrupted batch)."""
-        from joblib._parallel_backends import LokyBackend
-        from joblib.externals.loky import get_reusable_executor
+        from compliant_docking.sweep import workers
 
         n = self.workers()
         _quiet_resource_tracker()
         with _signals_left_to_the_launcher():
-            return get_reusable_executor(
-                max_workers=n, timeout=IDLE_WORKER_TIMEOUT_S, env=LokyBackend()._prepare_worker_env(n_jobs=n)
-            )
+            return workers.executor(n, IDLE_WORKER_TIMEOUT_S)
 
     def _start_workers(self) -> None:
         executor = self._executor()
@@ -110,11 +95,7 @@ class PoolLauncher(Launcher):
         setup_globals()
         configure_log(self.config.hydra.hydra_logging, self.config.hydra.verbose)
         Path(str(self.config.hydra.sweep.dir)).mkdir(parents=True, exist_ok=True)
-        loader = self.hydra_context.config_loader
-        configs = [
-            self.composed.pop(tuple(o), None) or self._compose(self.config, list(o)) for o in job_overrides
-        ]
-        keeping = vars(loader).pop("load_sweep_config", None)  # not sent to the workers with the context
+        configs = [self.compositions.take(self.config, list(o)) for o in job_overrides]
         log.info(f"PoolLauncher({self.workers()} workers) is launching {len(job_overrides)} jobs")
         for idx, overrides in enumerate(job_overrides):
             log.info(f"\t#{initial_job_idx + idx} : {' '.join(filter_overrides(overrides))}")
@@ -137,9 +118,6 @@ class PoolLauncher(Launcher):
         except BaseException:  # a dead worker, a signal: no job starts from here on
             _kill_workers(executor, futures)
             raise
-        finally:  # every job has been sent: keep the checked configs of a next batch (a tuning study)
-            if keeping is not None:
-                loader.load_sweep_config = keeping
 
 
 #: whether this process left loky's threads behind (see :func:`_kill_workers`); the command
@@ -161,14 +139,16 @@ def _kill_workers(executor, futures: Sequence = ()) -> None:
     global _abandoned_threads
     for future in futures:
         future.cancel()  # queued, not started: never runs
-    processes = list(getattr(executor, "_processes", {}).values())
-    for process in processes:
+    from compliant_docking.sweep.workers import worker_pids
+
+    pids = worker_pids(executor)
+    for pid in pids:
         try:
-            os.kill(process.pid, signal.SIGKILL)
+            os.kill(pid, signal.SIGKILL)
         except (OSError, TypeError):  # gone already (or never started)
             pass
-    for process in processes:
-        _wait_gone(process.pid)
+    for pid in pids:
+        _wait_gone(pid)
     executor.shutdown(wait=False, kill_workers=True)
     _abandoned_threads = True
 

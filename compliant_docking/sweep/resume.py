@@ -37,7 +37,6 @@ launchers, jobs outlive an interrupted launching process: ``squeue`` / ``ps``).
 
 from __future__ import annotations
 
-import re
 import shutil
 import sys
 from pathlib import Path
@@ -62,7 +61,6 @@ KEEP_STATUSES = ("ok", "incomplete")
 RUNS_MULTIRUN = "runs/multirun"
 #: the Hydra overrides a resume adds after ``hydra.sweep.dir``
 RESUME_OVERRIDES = ("hydra.callbacks.sweep.resume=true", "hydra.output_subdir=null")
-_PLAIN_PATH = re.compile(r"[A-Za-z0-9_/.\-]+")
 
 
 class ResumeError(ValueError):
@@ -116,14 +114,15 @@ def translate_argv(args: list[str]) -> list[str]:
 
 def _override_value(path: str) -> str:
     """``path`` as the value of a Hydra override (quoted when it needs to be)."""
-    if _PLAIN_PATH.fullmatch(path):
-        return path
-    if any(c in path for c in "'\\$"):
+    from compliant_docking.run.directories import override_value
+
+    value = override_value(path)
+    if value is None:
         raise ResumeError(
             f"cannot resume {path!r}: quotes, backslashes and $ in the path are "
             "not supported; rename or link the directory"
         )
-    return f"'{path}'"
+    return value
 
 
 def resuming(hydra_cfg) -> bool:

@@ -157,8 +157,9 @@ def distribution(key: str, override) -> Any:
 def expand_draws(draws: Mapping[str, Any], tuned: Sequence[Param]) -> list[list[str]]:
     """The overrides of each draw: the combinations of ``hydra.sweeper.draws`` (one empty
     draw when there are none). Raises :class:`SearchSpaceError` for a key that is tuned too."""
-    from hydra._internal.core_plugins.basic_sweeper import BasicSweeper
     from hydra.core.override_parser.overrides_parser import OverridesParser
+
+    from compliant_docking.config.hydra_adapter import split_sweep
 
     draws = flatten(draws)
     if not draws:
@@ -171,9 +172,9 @@ def expand_draws(draws: Mapping[str, Any], tuned: Sequence[Param]) -> list[list[
             f"hydra.sweeper.draws: {', '.join(clash)} is tuned as well; a key is one or the other"
         )
     try:
-        (combinations,) = BasicSweeper.split_arguments(overrides, None)
+        combinations = split_sweep(overrides)
     except Exception as exc:  # an interval in draws: no finite list of draws
         raise SearchSpaceError(
             f"hydra.sweeper.draws: {exc}; draws are lists (a,b,c) or range(), e.g. task.misalignment.seed: range(4)"
         ) from None
-    return [list(c) for c in combinations]
+    return combinations

@@ -199,7 +199,7 @@ class TuningSweeper(Sweeper):
         from hydra.core.global_hydra import GlobalHydra
 
         from compliant_docking.config.validate import composition_problem
-        from compliant_docking.sweep.guard import job_problems
+        from compliant_docking.run.guard import job_problems
 
         extremes = [(p.key, _extremes(p.distribution)) for p in plan["tuned"]]
         lowest = {key: values[0] for key, values in extremes}
@@ -382,7 +382,7 @@ class TuningSweeper(Sweeper):
         """Refuse the study (exit status 2, the command line's refusal); nothing ran. The
         guard asked :meth:`problems` before anything was created: this is for a sweeper used
         without it (from Python)."""
-        from compliant_docking.sweep.guard import refuse
+        from compliant_docking.run.guard import refuse
         from compliant_docking.sweep.session import SweepSession
 
         SweepSession.current().discard()

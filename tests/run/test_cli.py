@@ -2,6 +2,7 @@
 the exit statuses (0 docked, 1 failed, 3 gate not passed); --help: tests/test_cli.py."""
 
 import json
+import os
 
 import numpy as np
 import pandas as pd
@@ -65,3 +66,93 @@ def test_a_runtime_failure_exits_1(tmp_path):
     refused = run_cli(f"hydra.run.dir={tmp_path / 'refused'}", *SHORT, "task.stroke=[0,0,0]")
     assert refused.returncode == 2 and "task.stroke must be a non-zero vector" in refused.stderr
     assert not (tmp_path / "refused").exists()
+
+
+# --------------------------------------------------------------------------- in this process
+def _trap_the_sweep_package(monkeypatch) -> None:
+    """Every function of the sweep's guard, directories and resume, and the sweep guard's
+    check, raise."""
+    import inspect
+
+    from compliant_docking.sweep import directories, guard, resume
+
+    def trap(*args, **kwargs):
+        raise AssertionError("a single run went through the sweep package")
+
+    for module in (guard, directories, resume):
+        for name, obj in list(vars(module).items()):
+            if inspect.isfunction(obj) and obj.__module__ == module.__name__:
+                monkeypatch.setattr(module, name, trap)
+    # Hydra instantiates every configured callback in both modes and calls its hooks: the
+    # sweep guard's own work is on_multirun_start (its on_job_start does nothing in a run)
+    monkeypatch.setattr(guard.SweepGuard, "on_multirun_start", trap)
+
+
+def test_a_single_run_goes_through_the_run_layer_only(tmp_path, monkeypatch, capsys):
+    """The checks, the refusals and the directory claim of one run are the run layer's
+    (run/guard.py, run/directories.py): with the sweep's guard, directories and resume
+    made to raise, a run still refuses a bad value and a used directory."""
+    from tests.helpers import cli_in_process
+
+    _trap_the_sweep_package(monkeypatch)
+    held = tmp_path / "held"
+    held.mkdir()
+    (held / "x").write_text("")
+    code, err = cli_in_process(capsys, f"hydra.run.dir={held}")
+    assert code == 2 and "is not empty (x)" in err, err
+    code, err = cli_in_process(capsys, "controller.k=-1", f"hydra.run.dir={tmp_path / 'bad'}")
+    assert code == 2 and "controller.k" in err and not (tmp_path / "bad").exists(), err
+
+
+@pytest.mark.slow
+def test_a_single_run_runs_without_the_sweep_package(tmp_path, monkeypatch, capsys):
+    """The task of one run (its execution, summary and record) with the sweep's guard,
+    directories and resume made to raise (a few seconds: the fast twin above checks the
+    guard's path)."""
+    from tests.helpers import cli_in_process_output
+
+    _trap_the_sweep_package(monkeypatch)
+    run_dir = tmp_path / "run"
+    short = ("task.duration=0.05", "task.progress=false", "figures=false", "output.timeseries=false")
+    code, out, err = cli_in_process_output(capsys, f"hydra.run.dir={run_dir}", *short)
+    assert code in (0, 3) and (run_dir / "metrics.json").is_file(), out + err
+
+
+def test_a_command_leaves_the_process_as_it_found_it(tmp_path, monkeypatch, capsys):
+    """Hydra's process-wide HydraConfig and its error switch (HYDRA_FULL_ERROR, which the
+    command sets to report Hydra's errors itself) are put back after a command run in this
+    process: a later run through the Python API does not take this one's overrides."""
+    from hydra.core.hydra_config import HydraConfig
+
+    from compliant_docking.cli import main
+
+    monkeypatch.delenv("HYDRA_FULL_ERROR", raising=False)
+    held = tmp_path / "held"
+    held.mkdir()
+    (held / "x").write_text("")
+    assert not HydraConfig.initialized()
+    with pytest.raises(SystemExit) as refused:  # refused after the run's config was set
+        main([f"hydra.run.dir={held}", "controller.k=60"])
+    assert refused.value.code == 2 and "is not empty" in capsys.readouterr().err
+    assert not HydraConfig.initialized() and "HYDRA_FULL_ERROR" not in os.environ
+
+
+def test_an_unexpected_error_exits_1_with_its_traceback(tmp_path, monkeypatch, capsys):
+    """An error nobody reports (a bug) ends the command with status 1 and its traceback,
+    as Hydra's own reporter did; with HYDRA_FULL_ERROR=1 set by the user it propagates."""
+    from compliant_docking.cli import main
+    from compliant_docking.run import runner
+
+    def broken(*args, **kwargs):
+        raise RuntimeError("a bug in the runner")
+
+    monkeypatch.setattr(runner, "execute", broken)
+    monkeypatch.delenv("HYDRA_FULL_ERROR", raising=False)
+    with pytest.raises(SystemExit) as failed:
+        main([f"hydra.run.dir={tmp_path / 'a'}"])
+    err = capsys.readouterr().err
+    assert failed.value.code == 1 and "Traceback" in err and "RuntimeError: a bug in the runner" in err
+    monkeypatch.setenv("HYDRA_FULL_ERROR", "1")
+    with pytest.raises(RuntimeError, match="a bug in the runner"):
+        main([f"hydra.run.dir={tmp_path / 'b'}"])
+    assert os.environ["HYDRA_FULL_ERROR"] == "1"

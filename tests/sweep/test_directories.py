@@ -136,8 +136,8 @@ def test_an_explicit_directory_inside_a_sweep_is_refused(tmp_path, monkeypatch, 
 def test_the_claim_rule(tmp_path):
     """Default names take the next free one; explicit ones must be new or empty; continued
     ones are used as they are."""
-    from compliant_docking.sweep import directories
-    from compliant_docking.sweep.directories import claim
+    from compliant_docking.run import directories
+    from compliant_docking.run.directories import claim
 
     def config(kind: str, path: Path, explicit: bool):
         overrides = [f"hydra.{kind}.dir={path}"] if explicit else []

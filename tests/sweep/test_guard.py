@@ -16,7 +16,7 @@ import psutil
 import pytest
 from omegaconf import OmegaConf
 
-from compliant_docking.sweep import directories
+from compliant_docking.run import directories
 from tests.helpers import REPO_ROOT, SHORT_SWEEP, cli_in_process
 
 #: short single runs: 1 s of motion, 1 s of settling

@@ -1,4 +1,5 @@
-"""The composition memos (config/compose_cache.py) give the config Hydra gives without them."""
+"""The Hydra adapter (config/hydra_adapter.py): what it relies on is still in the installed
+Hydra, and the composition memos give the config Hydra gives without them."""
 
 from __future__ import annotations
 
@@ -11,7 +12,7 @@ from hydra.types import RunMode
 from omegaconf import DictConfig, ListConfig, OmegaConf
 
 from compliant_docking import CONF_DIR
-from compliant_docking.config import compose_cache, register_schemas
+from compliant_docking.config import hydra_adapter, register_schemas
 
 #: group choices, value overrides, presets, nested and list values, an added key
 OVERRIDE_SETS = (
@@ -58,18 +59,18 @@ def compose_all(sets) -> dict:
 @pytest.fixture
 def without_memos():
     """Hydra's own composition for the test; the memos back afterwards."""
-    compose_cache.uninstall()
+    hydra_adapter.uninstall()
     yield
-    compose_cache.install()
+    hydra_adapter.install()
 
 
 def test_memoized_compositions_equal_hydras_own(without_memos):
     plain = compose_all(OVERRIDE_SETS)
-    compose_cache.install()
+    hydra_adapter.install()
     first = compose_all(OVERRIDE_SETS)  # misses, then hits within the passes
     again = compose_all(OVERRIDE_SETS)  # all hits
     assert first == plain and again == plain
-    hits, misses = compose_cache.stats["composed"]
+    hits, misses = hydra_adapter.stats["composed"]
     assert hits >= len(plain) and misses <= len(OVERRIDE_SETS)  # the memo served most
 
 
@@ -84,7 +85,7 @@ def test_memoized_compositions_equal_hydras_own(without_memos):
 )
 def test_a_wrong_override_is_refused_as_without_the_memos(without_memos, overrides):
     plain = compose_all([overrides])
-    compose_cache.install()
+    hydra_adapter.install()
     assert compose_all([overrides]) == compose_all([overrides]) == plain
     assert all(isinstance(v, str) for v in plain.values())  # refused, in both modes
 
@@ -93,7 +94,7 @@ def test_an_edited_config_file_is_read_again(tmp_path):
     conf = tmp_path / "conf"
     shutil.copytree(CONF_DIR, conf)
     register_schemas()
-    compose_cache.install()
+    hydra_adapter.install()
 
     def k() -> float:
         GlobalHydra.instance().clear()
@@ -106,3 +107,51 @@ def test_an_edited_config_file_is_read_again(tmp_path):
     path = conf / "controller" / "impedance.yaml"
     path.write_text(path.read_text().replace("k: 50.0", "k: 77.0"))
     assert k() == 77.0
+
+
+# --------------------------------------------------------------------------- what it relies on
+def test_the_installed_hydra_offers_what_the_adapter_relies_on():
+    """Fails first when a Hydra release changes a non-public object the adapter uses."""
+    assert hydra_adapter.problems() == [], "\n".join(hydra_adapter.problems())
+
+
+def test_a_changed_hydra_is_named(monkeypatch):
+    from hydra._internal.core_plugins.basic_sweeper import BasicSweeper
+
+    monkeypatch.setattr(BasicSweeper, "split_arguments", staticmethod(lambda overrides: [[overrides]]))
+    monkeypatch.setattr(BasicSweeper, "validate_batch_is_legal", lambda self, batch: None)
+    found = hydra_adapter.problems()
+    assert len(found) == 2 and all("hydra-core" in p and "hydra_adapter.py" in p for p in found)
+    assert "split_arguments('overrides',)" in found[0] and "splitting a sweep" in found[0]
+    assert "no longer composes through its config loader's load_sweep_config" in found[1]
+
+
+class _Loader:
+    """A config loader's ``load_sweep_config``, counting its compositions."""
+
+    def __init__(self) -> None:
+        self.composed: list[tuple[str, ...]] = []
+
+    def load_sweep_config(self, master_config, sweep_overrides):
+        self.composed.append(tuple(sweep_overrides))
+        return {"composed": tuple(sweep_overrides)}
+
+
+def test_a_sweeps_checked_compositions_are_composed_once_in_all():
+    """The guard offers what it composed; Hydra's check gets those (each once), and the
+    launcher takes what the check got; an overrides list nobody offered is composed."""
+    import pickle
+
+    loader, master = _Loader(), object()
+    shared = hydra_adapter.share_compositions(loader)
+    assert hydra_adapter.share_compositions(loader) is shared  # one per loader
+    shared.offer({("a=1",): "guard's a=1"})
+    shared.keep_for(master)
+    assert loader.load_sweep_config(master, ["a=1"]) == "guard's a=1"  # Hydra's check
+    assert loader.load_sweep_config(master, ["a=2"]) == {"composed": ("a=2",)}
+    assert shared.take(master, ["a=1"]) == "guard's a=1"  # the launcher
+    assert shared.take(master, ["a=2"]) == {"composed": ("a=2",)}
+    assert loader.composed == [("a=2",)]  # each composed once
+    assert shared.take(master, ["a=1"]) == {"composed": ("a=1",)}  # taken already: composed
+    sent = pickle.loads(pickle.dumps(loader))  # Hydra sends its context to the jobs
+    assert sent.load_sweep_config.offered == {} and sent.load_sweep_config.loader is sent
