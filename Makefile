@@ -31,11 +31,13 @@ XDIST ?= auto
 test: $(STAMP) gl
 	$(PY) -m pytest -q -n $(XDIST) $(PYTEST_ARGS)
 
-# ruff (lint and format) and mypy, configured in pyproject.toml; CI runs this before the tests
+# ruff (lint and format), mypy and import-linter's layer contract, configured in
+# pyproject.toml; CI runs this before the tests
 lint: $(STAMP)
 	$(VENV)/bin/ruff check compliant_docking hydra_plugins tests benchmarks
 	$(VENV)/bin/ruff format --check compliant_docking hydra_plugins tests benchmarks
 	$(VENV)/bin/mypy
+	$(VENV)/bin/lint-imports --no-cache --no-logo
 
 test-slow: $(STAMP) gl
 	$(PY) -m pytest -q -n $(XDIST) -m slow $(PYTEST_ARGS)

@@ -1,146 +1,72 @@
 """The package's shape (docs/design.md): layers that import only the layers below them, no
 import cycle, at most 12 modules at the top of the package, no module over 450 lines.
 
-Imports are read from the source with ``ast`` (those inside functions and under
-``TYPE_CHECKING`` count too), so a lazy import cannot hide a dependency.
+The layers and the cycles are import-linter's contracts in pyproject.toml
+(``[tool.importlinter]``, also run by ``make lint`` as ``lint-imports``); its import graph is
+read from the source (grimp), imports inside functions and under ``TYPE_CHECKING`` included,
+so a lazy import cannot hide a dependency. The sizes are counted here: import-linter has no
+contract for them.
 """
 
 from __future__ import annotations
 
-import ast
-from pathlib import Path
+import shutil
+import sys
 
 import pytest
+from importlinter.cli import lint_imports
 
 from tests.helpers import REPO_ROOT
 
 PACKAGE = REPO_ROOT / "compliant_docking"
-#: the layers, lowest first; a module may import its own layer and the ones below
-LAYERS = (
-    "root",
-    "config",
-    "planning",
-    "sim",
-    "control",
-    "evaluation",
-    "viz",
-    "run",
-    "results",
-    "env",
-    "sweep",
-    "tracking",
-    "tune",
-    "cli",
-)
-#: top-level modules of the package and their layer (the rest of the top is the command line)
-ROOT_MODULES = {
-    "compliant_docking",
-    "compliant_docking.gl",
-    "compliant_docking.extras",
-    "compliant_docking.exit_codes",
-}
+PYPROJECT = REPO_ROOT / "pyproject.toml"
 MAX_TOP_LEVEL_MODULES = 12
 MAX_LINES = 450
+MODULES = {
+    ".".join(path.relative_to(REPO_ROOT).with_suffix("").parts): path for path in PACKAGE.rglob("*.py")
+}
 
 
-def _modules() -> dict[str, Path]:
-    found = {}
-    for path in PACKAGE.rglob("*.py"):
-        parts = path.relative_to(REPO_ROOT).with_suffix("").parts
-        name = ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
-        found[name] = path
-    return found
+def _lint(capsys) -> tuple[int, str]:
+    """import-linter's verdict on pyproject.toml's contracts: exit code and report (it puts
+    the working directory on ``sys.path``: restored by the callers' monkeypatch)."""
+    code = lint_imports(config_filename=str(PYPROJECT), no_cache=True, no_logo=True)
+    return code, capsys.readouterr().out
 
 
-MODULES = _modules()
+def test_the_import_contracts_are_kept(monkeypatch, capsys):
+    monkeypatch.setattr(sys, "path", list(sys.path))
+    code, report = _lint(capsys)
+    assert code == 0, "imports against the layering or an import cycle:\n" + report
 
 
-def _imports(name: str, path: Path) -> set[str]:
-    """The package's modules that ``name`` imports (resolved to existing modules)."""
-    out: set[str] = set()
-    package = name if path.name == "__init__.py" else name.rpartition(".")[0]
-    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
-        targets: list[str] = []
-        if isinstance(node, ast.Import):
-            targets = [alias.name for alias in node.names]
-        elif isinstance(node, ast.ImportFrom):
-            base = node.module or ""
-            if node.level:
-                anchor = package.split(".")[: len(package.split(".")) - node.level + 1]
-                base = ".".join(anchor + ([node.module] if node.module else []))
-            targets = [base] + [f"{base}.{alias.name}" for alias in node.names]
-        for target in targets:
-            while target and target not in MODULES:
-                target = target.rpartition(".")[0]
-            if target and target != name:
-                out.add(target)
-    return out
-
-
-GRAPH = {name: _imports(name, path) for name, path in MODULES.items()}
-
-
-def layer(name: str) -> str:
-    if name in ROOT_MODULES:
-        return "root"
-    parts = name.split(".")
-    if len(parts) >= 2 and parts[1] in LAYERS and (MODULES[name].name == "__init__.py" or len(parts) > 2):
-        return parts[1]
-    return "cli"  # __main__, cli, report: the command line on top
-
-
-def test_every_module_has_a_known_layer():
-    unknown = [m for m in MODULES if layer(m) == "cli" and m.count(".") > 1]
-    assert not unknown, f"modules in a sub-package that is not a layer: {unknown}"
-
-
-def test_each_layer_imports_only_the_layers_below_it():
-    rank = {name: i for i, name in enumerate(LAYERS)}
-    upward = sorted(
-        f"{m} ({layer(m)}) imports {t} ({layer(t)})"
-        for m, targets in GRAPH.items()
-        for t in targets
-        if rank[layer(t)] > rank[layer(m)]
-    )
-    assert not upward, "imports against the layering:\n" + "\n".join(upward)
-
-
-def test_no_import_cycle():
-    index: dict[str, int] = {}
-    low: dict[str, int] = {}
-    stack: list[str] = []
-    on_stack: set[str] = set()
-    cycles: list[list[str]] = []
-
-    def visit(v: str) -> None:  # Tarjan's strongly connected components
-        index[v] = low[v] = len(index)
-        stack.append(v)
-        on_stack.add(v)
-        for w in GRAPH[v]:
-            if w not in index:
-                visit(w)
-                low[v] = min(low[v], low[w])
-            elif w in on_stack:
-                low[v] = min(low[v], index[w])
-        if low[v] == index[v]:
-            component = []
-            while True:
-                w = stack.pop()
-                on_stack.discard(w)
-                component.append(w)
-                if w == v:
-                    break
-            if len(component) > 1:
-                cycles.append(sorted(component))
-
-    for v in GRAPH:
-        if v not in index:
-            visit(v)
-    assert not cycles, f"import cycles: {cycles}"
+def test_the_import_contracts_see_lazy_and_type_checking_imports(tmp_path, monkeypatch, capsys):
+    """The contracts can fail: in a copy of the package, an import of the run layer inside a
+    function of the sim layer, and one of the results layer under ``TYPE_CHECKING`` in the
+    planning layer, both break the layering; a pair of modules importing each other is a
+    cycle."""
+    copy = tmp_path / "compliant_docking"
+    shutil.copytree(PACKAGE, copy, ignore=shutil.ignore_patterns("__pycache__"))
+    with (copy / "sim" / "progress.py").open("a") as f:
+        f.write("\n\ndef _late():\n    from compliant_docking.run import runner\n")
+    with (copy / "planning" / "__init__.py").open("a") as f:
+        f.write("\nfrom typing import TYPE_CHECKING\n\nif TYPE_CHECKING:\n")
+        f.write("    from compliant_docking.results import load\n")
+    with (copy / "results" / "tables.py").open("a") as f:
+        f.write("\nfrom compliant_docking.results import summary\n")
+    monkeypatch.setattr(sys, "path", list(sys.path))
+    monkeypatch.chdir(tmp_path)  # lint-imports puts the working directory first on sys.path
+    monkeypatch.delitem(sys.modules, "compliant_docking")
+    code, report = _lint(capsys)
+    assert code == 1, report
+    assert "compliant_docking.sim is not allowed to import compliant_docking.run" in report
+    assert "compliant_docking.planning is not allowed to import compliant_docking.results" in report
+    assert "No cycles are allowed in compliant_docking.results" in report
+    assert "- .tables -> .summary" in report
 
 
 def test_top_of_the_package_stays_small():
-    top = sorted(m for m, p in MODULES.items() if m.count(".") == 1 and p.name != "__init__.py")
+    top = sorted(m for m in MODULES if m.count(".") == 1 and not m.endswith(".__init__"))
     assert len(top) <= MAX_TOP_LEVEL_MODULES, top
 
 
@@ -148,14 +74,3 @@ def test_top_of_the_package_stays_small():
 def test_no_module_is_over_450_lines(name):
     lines = len(MODULES[name].read_text(encoding="utf-8").splitlines())
     assert lines <= MAX_LINES, f"{name}: {lines} lines"
-
-
-def test_the_layering_check_sees_an_upward_import(tmp_path):
-    """The checks can fail: an import of the run layer from the sim layer is flagged."""
-    rank = {name: i for i, name in enumerate(LAYERS)}
-    assert layer("compliant_docking.sim.simulate") == "sim"
-    assert layer("compliant_docking.run.runner") == "run"
-    assert rank[layer("compliant_docking.run.runner")] > rank[layer("compliant_docking.sim.simulate")]
-    fake = tmp_path / "m.py"
-    fake.write_text("from compliant_docking.run.runner import execute\n")
-    assert "compliant_docking.run.runner" in _imports("compliant_docking.sim.fake", fake)

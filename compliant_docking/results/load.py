@@ -29,6 +29,7 @@ from compliant_docking.run.rundir import (
     IDENTITY_GROUPS,
     MULTIRUN_FILE,
     find_job_dirs,
+    flatten,
     read_metrics,
     read_overrides,
 )
@@ -136,9 +137,8 @@ def config_leaves(job_dir: Path) -> dict:
         data = yaml.load(text, Loader=loader)  # noqa: S506 (a safe loader)
     except Exception:
         return {}
-    out: dict = {}
-    if isinstance(data, dict):
-        _flatten(data, "", out)
+    leaves = flatten(data) if isinstance(data, dict) else {}
+    out = {k: json.dumps(v) if isinstance(v, (list, tuple)) else v for k, v in leaves.items()}
     for _ in range(4):  # resolve ${other.key} (Hydra saves the config unresolved); chains too
         pending = {k: v for k, v in out.items() if isinstance(v, str) and _REFERENCE.fullmatch(v)}
         resolved = {k: out[v[2:-1]] for k, v in pending.items() if v[2:-1] in out}
@@ -150,17 +150,6 @@ def config_leaves(job_dir: Path) -> dict:
 
 #: an interpolation of another key of the same config: ``${tool.geometry.radius}``
 _REFERENCE = re.compile(r"\$\{[A-Za-z_][\w.]*\}")
-
-
-def _flatten(node: dict, prefix: str, out: dict) -> None:
-    for key, value in node.items():
-        name = f"{prefix}{key}"
-        if isinstance(value, dict) and value:
-            _flatten(value, name + ".", out)
-        elif isinstance(value, (list, tuple, dict)):
-            out[name] = json.dumps(value)
-        else:
-            out[name] = value
 
 
 def _extend_unique(target: list[str], keys: Iterable[str]) -> None:

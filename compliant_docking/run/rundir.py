@@ -22,7 +22,7 @@ import random
 import re
 import shutil
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -240,6 +240,22 @@ def read_config(job_dir: Path) -> dict | None:
     except (OSError, yaml.YAMLError):
         return None
     return data if isinstance(data, dict) else None
+
+
+def flatten(mapping: Mapping[str, Any] | None, prefix: str = "") -> dict[str, Any]:
+    """A nested config as ``{"controller.k": 300.0, …}`` (``{}`` for None): each leaf under
+    its dotted key, lists as values, an empty mapping without a leaf. A key written dotted
+    (``controller.k:`` in YAML) and the same key nested read the same. The one rule of every
+    reader of a config: ``load_runs``' columns, MLflow's parameters, a sweep's ``params`` and
+    a tuning study's ``params`` and ``draws``."""
+    flat: dict[str, Any] = {}
+    for key, value in (mapping or {}).items():
+        name = f"{prefix}{key}"
+        if isinstance(value, Mapping):
+            flat.update(flatten(value, f"{name}."))
+        else:
+            flat[name] = value
+    return flat
 
 
 # --------------------------------------------------------------------------- finding jobs

@@ -28,6 +28,7 @@ from typing import Any
 from hydra.experimental.callback import Callback
 from omegaconf import DictConfig
 
+from compliant_docking.run.rundir import flatten
 from compliant_docking.sweep import resume
 from compliant_docking.sweep.directories import sweep_dir_of
 from compliant_docking.sweep.launchers import describe, is_submitit
@@ -60,14 +61,9 @@ def _combinations(params, arguments: list[str]) -> int | None:
     (private) ``BasicSweeper.split_arguments``."""
     from hydra.core.override_parser.overrides_parser import OverridesParser
 
-    def flat(node, prefix: str = "") -> list[str]:  # a.b.c=v, also when given nested
-        out = []
-        for k, v in node.items():
-            out += flat(v, f"{prefix}{k}.") if hasattr(v, "items") else [f"{prefix}{k}={v}"]
-        return out
-
+    lines = [f"{key}={value}" for key, value in flatten(params).items()]  # also when nested
     values: dict[str, int] = {}
-    for override in OverridesParser.create().parse_overrides(flat(params) + arguments):
+    for override in OverridesParser.create().parse_overrides(lines + arguments):
         if not override.is_sweep_override():
             values[override.get_key_element()] = 1
         elif override.is_discrete_sweep():

@@ -94,16 +94,6 @@ def unreachable(uri: str) -> str | None:
         return f"{type(reason).__name__}: {reason}" if str(reason) else type(reason).__name__
 
 
-def flatten(node: Any, prefix: str = "") -> dict[str, Any]:
-    """A nested config as ``{"controller.k": 300.0, …}`` (lists stay values)."""
-    if isinstance(node, dict):
-        out: dict[str, Any] = {}
-        for key, value in node.items():
-            out.update(flatten(value, f"{prefix}{key}."))
-        return out
-    return {prefix[:-1]: node}
-
-
 def param_text(value: Any) -> str:
     """A config value as MLflow parameter text: JSON for lists and null, else str."""
     text = json.dumps(value) if isinstance(value, (list, dict)) or value is None else str(value)
@@ -287,7 +277,7 @@ class MlflowCallback(Callback):
                 metrics.append(Metric(key, float(value), now, 0))
             elif value is not None:
                 text.append(RunTag(key, str(value)[:TAG_CHARS]))
-        params = [Param(k, param_text(v)) for k, v in flatten(cfg).items()]
+        params = [Param(k, param_text(v)) for k, v in rundir.flatten(cfg).items()]
         for i in range(0, max(len(params), len(metrics), len(text)), BATCH):
             client.log_batch(
                 run_id, metrics=metrics[i : i + BATCH], params=params[i : i + BATCH], tags=text[i : i + BATCH]

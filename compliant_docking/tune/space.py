@@ -25,6 +25,8 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from compliant_docking.run.rundir import flatten
+
 _PLAIN = re.compile(r"[A-Za-z0-9_.\-+/]+")
 
 
@@ -57,22 +59,6 @@ def format_value(value: Any) -> str:
     if _PLAIN.fullmatch(text) and text.lower() not in ("null", "true", "false"):
         return text
     return "'" + text.replace("\\", "\\\\").replace("'", "\\'") + "'"
-
-
-def flatten(mapping: Mapping[str, Any] | None, prefix: str = "") -> dict[str, Any]:
-    """``{"controller": {"k": "interval(1,2)"}}`` → ``{"controller.k": "interval(1,2)"}``.
-
-    Keys with dots are the YAML way (``controller.k: …``); the command line's
-    ``hydra.sweeper.params.controller.m=…`` nests them instead. Both mean the same key.
-    """
-    flat: dict[str, Any] = {}
-    for key, value in (mapping or {}).items():
-        name = f"{prefix}{key}"
-        if isinstance(value, Mapping):
-            flat.update(flatten(value, f"{name}."))
-        else:
-            flat[name] = value
-    return flat
 
 
 def _prefix(override) -> str:

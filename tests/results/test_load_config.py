@@ -13,6 +13,7 @@ from omegaconf import OmegaConf
 
 from compliant_docking.results import configuration_keys, load_runs
 from compliant_docking.results.load import config_leaves
+from compliant_docking.run.rundir import flatten
 from tests.helpers import make_cfg
 
 
@@ -99,3 +100,15 @@ def test_only_interpolations_of_the_config_itself_are_resolved(tmp_path, value):
     (path / ".hydra" / "config.yaml").write_text(f"tool:\n  geometry:\n    radius: 0.01\na: '{value}'\n")
     expected = 0.01 if value.startswith("${tool") else value  # a resolver stays as written
     assert config_leaves(path)["a"] == expected
+
+
+def test_a_config_is_flattened_by_one_rule():
+    """Every reader's rule (load_runs, MLflow's parameters, sweep and tuning params): each
+    leaf under its dotted key, nested and dotted keys alike, lists as values, an empty
+    mapping without a leaf, an OmegaConf node as a dict."""
+    nested = {"controller": {"k": 1.5, "gains": [1, 2], "extra": {}}, "task.seed": 3}
+    expected = {"controller.k": 1.5, "controller.gains": [1, 2], "task.seed": 3}
+    assert flatten(nested) == expected
+    assert flatten({"controller.k": 1.5, "controller": {"gains": [1, 2]}, "task": {"seed": 3}}) == expected
+    assert flatten(OmegaConf.create(nested)) == expected
+    assert flatten(None) == {}

@@ -11,7 +11,8 @@ import pytest
 import yaml
 from omegaconf import OmegaConf
 
-from compliant_docking.tracking.mlflow_callback import MlflowCallback, flatten, param_text
+from compliant_docking.run.rundir import flatten
+from compliant_docking.tracking.mlflow_callback import MlflowCallback, param_text
 from tests.helpers import SHORT_SWEEP as SHORT
 from tests.helpers import SWEEP_LAUNCHERS, sweep_with
 
