@@ -52,9 +52,12 @@ SESSION_FIXTURES = ("converted", "failing_sweeps")
 MODULE_FIXTURES = ("killed", "finished_sweep", "finished_job", "two_runs", "real_run", "short_run")
 
 
+@pytest.hookimpl(tryfirst=True)
 def pytest_collection_modifyitems(config, items) -> None:
     """Each test that uses a shared fixture joins that fixture's xdist group (per module for
-    a module-scoped one)."""
+    a module-scoped one). First among the hooks: an xdist worker's own hook reads the groups
+    (it suffixes each grouped test's id with its group) and runs before this one otherwise,
+    as conftest files register before the worker's plugin, so no test was ever grouped."""
     for item in items:
         used = getattr(item, "fixturenames", ())
         group = next((name for name in SESSION_FIXTURES if name in used), None)

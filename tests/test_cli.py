@@ -73,11 +73,21 @@ def test_bash_completes_groups_options_and_keys(tmp_path):
     """Source the install script in bash and complete as the shell would (from another
     directory: the config tree is found from the installed package)."""
     env = {**os.environ, "PATH": os.pathsep.join([str(SCRIPT.parent), os.environ.get("PATH", "")])}
+    # the install script, written once as a user's ~/.bashrc line would produce it
+    install = subprocess.run(
+        ["bash", "-c", "compliant-docking -sc install=bash > install.sh"],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env=env,
+    )
+    assert install.returncode == 0, install.stderr[-2000:]
 
     def complete(line: str) -> list[str]:
         words = line.split(" ")
         script = (
-            'eval "$(compliant-docking -sc install=bash)"\n'
+            "source install.sh\n"
             f'COMP_LINE="{line}"; COMP_POINT=${{#COMP_LINE}}\n'
             f"COMP_WORDS=({' '.join(words)}); COMP_CWORD={len(words) - 1}\n"
             'hydra_bash_completion; printf "%s\\n" "${COMPREPLY[@]}"\n'

@@ -218,8 +218,22 @@ def available_controllers():
     return sorted(names, key=lambda n: n != "impedance")
 
 
-@pytest.mark.parametrize("controller", available_controllers())
-@pytest.mark.parametrize("robot", ["iiwa14", "fr3"])
+def preset_cells():
+    """(robot, controller) of every robot and controller: the default controller's cells run
+    in the fast suite (the preset, its gate and the runner on both robots); the other
+    controllers' cells, each a 15 s run with its own gain file, are `slow` (nightly): the fast
+    suite proves that each gain file reaches the controller
+    (test_each_controllers_tracking_gains_reach_the_preset) and each law by its own tests
+    (tests/control/test_transients.py, test_observer.py, test_hqp.py, test_se3_lie.py)."""
+    nightly = pytest.mark.slow(reason="the impedance cells prove the preset on this robot; see preset_cells")
+    return [
+        (robot, name) if name == "impedance" else pytest.param(robot, name, marks=nightly)
+        for name in available_controllers()
+        for robot in ("iiwa14", "fr3")
+    ]
+
+
+@pytest.mark.parametrize("robot, controller", preset_cells())
 def test_the_preset_passes_on_both_robots(robot, controller, tmp_path):
     """The preset with the default controller (impedance), and with every other controller
     (its tracking gains come from conf/robot_controller/tracking/<robot>_<controller>.yaml)."""
@@ -234,6 +248,30 @@ def test_the_preset_passes_on_both_robots(robot, controller, tmp_path):
     assert record["tracking_contacts_max"] == 0 and record["tracking_saturation_ratio"] <= 0.01
     saved = json.loads((tmp_path / "metrics.json").read_text())
     assert saved["tracking_gate"] == "PASS" and saved["gate_failures"] is None
+
+
+@pytest.mark.parametrize("robot", ["iiwa14", "fr3"])
+def test_each_controllers_tracking_gains_reach_the_preset(robot):
+    """Every controller's tracking gain file (conf/robot_controller/tracking/) is what the
+    preset's controller carries on each robot, and differs from its docking gains: the
+    wiring the slow cells of test_the_preset_passes_on_both_robots rely on."""
+
+    def gains_of(option: str) -> dict:  # a gain file's keys, after those of the files it extends
+        path = Path(CONF_DIR) / "robot_controller" / f"{option}.yaml"
+        own = OmegaConf.to_container(OmegaConf.load(path))
+        extended = [gains_of(name) for name in own.pop("defaults", []) if name != "_self_"]
+        return {key: value for gains in [*extended, own] for key, value in gains.items()}
+
+    for controller in available_controllers():
+        option = f"tracking/{robot}_{controller}"
+        gains = gains_of(option)
+        overrides = (f"robot={robot}", f"controller={controller}")
+        preset = OmegaConf.to_container(
+            make_cfg("+experiment=tracking_gate", *overrides).controller, enum_to_str=True
+        )
+        docking = OmegaConf.to_container(make_cfg(*overrides).controller, enum_to_str=True)
+        assert gains and {key: preset[key] for key in gains} == gains, option
+        assert any(docking[key] != value for key, value in gains.items()), option
 
 
 def test_a_gate_failure_exits_3_through_the_command_line(tmp_path, capsys):

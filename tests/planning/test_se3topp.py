@@ -575,7 +575,17 @@ def available_controllers():
 RESEARCH_CASE = ("task.stroke=[0.0,0.0,-0.18]",)
 
 
-@pytest.mark.parametrize("controller", available_controllers())
+#: the planner docks with the default controller in the fast suite, with the other controllers
+#: in the nightly suite (`slow`): the plan does not depend on the controller (its durations
+#: are checked in the impedance cell), and each other controller docks the default scene in
+#: its own fast tests (tests/control/test_hqp.py, test_se3_lie.py, test_observer.py)
+_OTHER_CONTROLLERS = pytest.mark.slow(reason="the impedance cell proves the se3topp docking")
+
+
+@pytest.mark.parametrize(
+    "controller",
+    [c if c == "impedance" else pytest.param(c, marks=_OTHER_CONTROLLERS) for c in available_controllers()],
+)
 def test_se3topp_docks_on_iiwa14(controller, tmp_path):
     from compliant_docking.run.runner import execute
     from compliant_docking.sim.simulate import prepare

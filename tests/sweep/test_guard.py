@@ -280,7 +280,12 @@ def test_two_runs_started_together_each_get_their_own_directory(tmp_path):
         assert str(run_dir.relative_to(tmp_path)) in " ".join(r.stdout for r in results)
 
 
+@pytest.mark.slow(reason="the same claim as test_two_runs_started_together, for a sweep; see the comment")
 def test_two_sweeps_started_together_each_get_their_own_directory(tmp_path):
+    # nightly (two sweep processes and their workers): a sweep takes its directory by the
+    # claim a run does (sweep/directories.py), which test_two_runs_started_together races
+    # between two real processes in the fast suite; the next free sweep name and the
+    # override that sends the jobs there: test_a_taken_default_name_gets_the_next_free_one
     blocked = _block_the_next_minute(tmp_path / "runs" / "multirun", "")
     sweep = ["-m", *SHORT_SWEEP, "hydra.launcher.n_jobs=1", "hydra.callbacks.sweep.figures=false"]
     results = _together(tmp_path, [*sweep, "controller.k=40,41"], [*sweep, "controller.k=300,301"])

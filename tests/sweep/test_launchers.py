@@ -41,7 +41,18 @@ def _files(job_dir: Path) -> set[str]:
     return {str(p.relative_to(job_dir)) for p in job_dir.rglob("*") if p.is_file()}
 
 
-def test_the_default_pool_hydras_joblib_and_submitit_local_give_the_same_outputs(failing_sweeps):
+#: the launchers compared with the default pool: Hydra's joblib launcher in the fast suite,
+#: submitit's local launcher (a process per job) in the nightly suite (`slow`); both compose
+#: each job's config again where the job runs, which is what the comparison is about, so the
+#: joblib pair proves the pool's configs in the fast suite
+OTHER_LAUNCHERS = [
+    "joblib",
+    pytest.param("submitit", marks=pytest.mark.slow(reason="the joblib pair is fast")),
+]
+
+
+@pytest.mark.parametrize("other", OTHER_LAUNCHERS)
+def test_the_default_pool_and_another_launcher_give_the_same_outputs(failing_sweeps, other):
     """Same job directories, metrics (timing and start time aside), time series, failure
     records, summary rows, end-of-sweep summary and exit status (1: a job failed);
     submitit's logs stay in .submitit/. The default launcher (sweep/pool.py) sends each
@@ -49,9 +60,8 @@ def test_the_default_pool_hydras_joblib_and_submitit_local_give_the_same_outputs
     again in the worker, submitit in the job's own process: the jobs must not tell. The
     pool run is the shared failing sweep (tests/sweep/conftest.py), which also draws the
     comparison figures (a directory, not compared here)."""
-    for name in ("joblib", "submitit"):  # side by side with the pool run if it is not done yet
-        failing_sweeps.start(name)
-    runs = {name: failing_sweeps.result(name) for name in ("pool", "joblib", "submitit")}
+    failing_sweeps.start(other)  # side by side with the pool run if it is not done yet
+    runs = {name: failing_sweeps.result(name) for name in ("pool", other)}
     tmp_path = runs["pool"].sweep_dir.parent
     out = {name: (run.stdout, run.stderr) for name, run in runs.items()}
     for name, run in runs.items():
@@ -67,21 +77,15 @@ def test_the_default_pool_hydras_joblib_and_submitit_local_give_the_same_outputs
             "[2/3] ",
             "[3/3] ",
         ]  # one progress line per job
-    assert "as local submitit processes" in out["submitit"][0]
     assert "PoolLauncher(2 workers) is launching 3 jobs" in out["pool"][0]
 
     jobs = {
         name: sorted(p for p in (tmp_path / name).iterdir() if p.is_dir() and p.name[0].isdigit())
         for name in runs
     }
-    assert (
-        [p.name for p in jobs["pool"]]
-        == [p.name for p in jobs["joblib"]]
-        == [p.name for p in jobs["submitit"]]
-    )
+    assert [p.name for p in jobs["pool"]] == [p.name for p in jobs[other]]
     assert len(jobs["pool"]) == 3
-    pairs = [*zip(jobs["pool"], jobs["joblib"]), *zip(jobs["pool"], jobs["submitit"])]
-    for a, b in pairs:
+    for a, b in zip(jobs["pool"], jobs[other]):
         assert _files(a) == _files(b), a.name
         ma = json.loads((a / "metrics.json").read_text())
         mb = json.loads((b / "metrics.json").read_text())
@@ -110,19 +114,20 @@ def test_the_default_pool_hydras_joblib_and_submitit_local_give_the_same_outputs
             "paired.parquet",
         }
     sa = pd.read_parquet(tmp_path / "pool" / "summary.parquet")
-    for other in ("joblib", "submitit"):
-        sb = pd.read_parquet(tmp_path / other / "summary.parquet")
-        assert list(sa.columns) == list(sb.columns) and len(sa) == len(sb) == 3
-        keep = [c for c in sa.columns if c not in VARYING | {"run_dir"}]
-        pd.testing.assert_frame_equal(sa[keep], sb[keep], check_exact=True)
+    sb = pd.read_parquet(tmp_path / other / "summary.parquet")
+    assert list(sa.columns) == list(sb.columns) and len(sa) == len(sb) == 3
+    keep = [c for c in sa.columns if c not in VARYING | {"run_dir"}]
+    pd.testing.assert_frame_equal(sa[keep], sb[keep], check_exact=True)
 
-    # submitit's logs and pickles: a hidden folder of the sweep, which load_runs never reads
-    logs = list((tmp_path / "submitit" / ".submitit").rglob("*_log.out"))
-    assert len(logs) == 3
-    assert any("· finished ·" in log.read_text() for log in logs)  # the job's own progress line
-    with warnings.catch_warnings():
-        warnings.simplefilter("error", RunSkippedWarning)
-        assert len(load_runs(tmp_path / "submitit")) == 3
+    if other == "submitit":
+        assert "as local submitit processes" in out["submitit"][0]
+        # submitit's logs and pickles: a hidden folder of the sweep, which load_runs never reads
+        logs = list((tmp_path / "submitit" / ".submitit").rglob("*_log.out"))
+        assert len(logs) == 3
+        assert any("· finished ·" in log.read_text() for log in logs)  # the job's own progress line
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", RunSkippedWarning)
+            assert len(load_runs(tmp_path / "submitit")) == 3
 
 
 @pytest.mark.parametrize("launcher", ["submitit_local", "submitit_slurm"])
