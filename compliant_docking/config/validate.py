@@ -293,12 +293,21 @@ def _relations(cfg: DictConfig) -> list[str]:
     found += _interface(cfg, has_target)
     found += _files(cfg, has_target)
     eps_abs, max_torque = _get(cfg, "controller.eps_abs"), _get(cfg, "robot.max_torque")
-    if isinstance(eps_abs, (int, float)) and isinstance(max_torque, list) and min(max_torque) <= 4 * eps_abs:
-        found.append(  # controller=hqp keeps 2·eps_abs inside the torque clip (control/hqp/controller.py)
-            f"robot.max_torque must exceed 4·controller.eps_abs = {4 * eps_abs:g} N·m for every joint (the "
-            f"QP keeps twice its accuracy inside the clip); got {show(max_torque)}."
-        )
-    return found
+    hqp = isinstance(eps_abs, (int, float)) and isinstance(max_torque, list)
+    margin = torque_margin_problem(max_torque, eps_abs) if hqp else None
+    return found + [margin] if margin else found
+
+
+def torque_margin_problem(max_torque: list[float], eps_abs: float) -> str | None:
+    """controller=hqp keeps 2·eps_abs inside the torque clip (control/hqp/controller.py):
+    why ``robot.max_torque`` leaves no room for it, or None (the config check and the
+    controller's constructor both ask this)."""
+    if min(max_torque) > 4 * eps_abs:
+        return None
+    return (
+        f"robot.max_torque must exceed 4·controller.eps_abs = {4 * eps_abs:g} N·m for every joint (the "
+        f"QP keeps twice its accuracy inside the clip); got {show(max_torque)}."
+    )
 
 
 def _files(cfg: DictConfig, has_target: bool) -> list[str]:
