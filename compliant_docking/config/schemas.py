@@ -132,14 +132,14 @@ class PhysicsConfig:
     tolerance: float = within(0.0, 1.0, high_open=True)
     sdf_iterations: int = integers(1, 1000)
     sdf_initpoints: int = integers(1, 1000)
-    # MuJoCo's bounding-volume midphase pays off for large meshes; for the handful of
-    # convex pieces of a docking interface it only costs time (results are identical).
+    # the midphase pays off for big meshes; for an interface's few convex pieces it costs time (same results)
     midphase: bool = MISSING
 
 
 # --------------------------------------------------------------------------- controllers
-#: every controller's condition_threshold: Λ's solve falls back above this condition number
-CONDITION = Range(low=1.0, low_open=True)
+CONDITION = Range(low=1.0, low_open=True)  # every controller's condition_threshold (Λ's fallback)
+
+
 @dataclass
 class ControllerConfig:
     """Fields every controller accepts."""
@@ -218,7 +218,7 @@ class SE3LieConfig(ControllerConfig):
     D_diag: List[float] = at_least(0.0, size=6)  # [N·s/m | N·m·s/rad]
     K_diag: List[float] = at_least(0.0, size=6)  # [N/m | N·m/rad]
     null_damping: float = at_least(0.0, unit="1/s")  # null-space joint acceleration damping q̈ = −b·v [1/s]
-    condition_threshold: float = declared(CONDITION)  # cond(J_b M⁻¹ J_bᵀ) past which Λ is a damped pseudo-inverse
+    condition_threshold: float = declared(CONDITION)  # cond(J_b M⁻¹ J_bᵀ) past which Λ is damped
     desired_wrench: List[float] = finite(size=6)  # F_d in the desired TCP frame [N, N·m]
     formulation: SE3Formulation = MISSING  # twist | lambda_space (same law)
     # keep the apparent inertia A ⪰ ratio·Λ_b (docs/controllers/se3_lie.md); null: the law of §3

@@ -251,26 +251,11 @@ def _get(cfg: DictConfig, key: str) -> Any:
 
 def _relations(cfg: DictConfig) -> list[str]:
     """Checks that involve several settings (ranges are fine when this runs)."""
-    found: list[str] = []
-    per_joint = PER_JOINT + ("controller.K_ji", "controller.D_ji")  # the last two: controller=hqp
-    lengths = {key: len(v) for key in per_joint if isinstance(v := _get(cfg, key), list)}
-    if len(set(lengths.values())) > 1:  # name the odd ones against the most common length
-        counts = [n for n in lengths.values()]
-        joints = max(set(counts), key=counts.count)
-        agree = ", ".join(k for k, n in lengths.items() if n == joints)
-        for key, n in lengths.items():
-            if n != joints:
-                found.append(
-                    f"{key} has {n} values; the other per-joint settings ({agree}) have {joints}: "
-                    "give one value per joint."
-                )
+    found = per_joint_problems(cfg)
     for key in QUATERNIONS:
         quat = _get(cfg, key)
-        if isinstance(quat, list) and len(quat) == 4 and abs(math.hypot(*quat) - 1.0) > UNIT_TOLERANCE:
-            found.append(
-                f"{key} must be a unit quaternion [w, x, y, z] (norm 1 within {UNIT_TOLERANCE:g}); "
-                f"got {show(quat)} (norm {math.hypot(*quat):.6g})."
-            )
+        if isinstance(quat, list) and len(quat) == 4 and (problem := quaternion_problem(key, quat)):
+            found.append(problem)
     has_target = _get(cfg, "target.name") not in (None, "none")
     stroke = _get(cfg, "task.stroke")
     if has_target and isinstance(stroke, list) and not any(stroke):
@@ -280,14 +265,8 @@ def _relations(cfg: DictConfig) -> list[str]:
             "task.init_pos must be set when there is no target (target=none): the start pose "
             "cannot be derived from a socket; got null."
         )
-    overshoot, press, settle = (
-        _get(cfg, f"task.{k}") for k in ("insertion_overshoot", "press_duration", "settle_time")
-    )
-    if has_target and overshoot and press is not None and settle is not None and press > settle:
-        found.append(
-            f"task.press_duration must be at most task.settle_time = {settle:g} s (the press of "
-            f"task.insertion_overshoot happens while the run settles); got {press:g}."
-        )
+    press = press_problem(cfg, has_target)
+    found += [press] if press else []
     found += _misalignment(cfg, has_target)
     found += robustness.problems(cfg)  # sensor, model_error, dynamics
     found += _interface(cfg, has_target)
@@ -308,6 +287,53 @@ def torque_margin_problem(max_torque: list[float], eps_abs: float) -> str | None
         f"robot.max_torque must exceed 4·controller.eps_abs = {4 * eps_abs:g} N·m for every joint (the "
         f"QP keeps twice its accuracy inside the clip); got {show(max_torque)}."
     )
+
+
+def quaternion_problem(key: str, quat: list[float]) -> str | None:
+    """Why the setting ``key`` is not a unit quaternion [w, x, y, z], or None (the config
+    check and the scene's and task's constructions ask)."""
+    if len(quat) == 4 and all(map(math.isfinite, quat)) and abs(math.hypot(*quat) - 1.0) <= UNIT_TOLERANCE:
+        return None
+    norm = f" (norm {math.hypot(*quat):.6g})" if len(quat) == 4 else ""
+    return f"{key} must be a unit quaternion [w, x, y, z] (norm 1 within {UNIT_TOLERANCE:g}); got {show(quat)}{norm}."
+
+
+def press_problem(cfg: DictConfig, has_target: bool) -> str | None:
+    """Why the press past the seat does not fit in the settle time, or None (the config
+    check and the planner's construction, compliant_docking/sim/simulate.py, both ask)."""
+    overshoot, press, settle = (
+        _get(cfg, f"task.{k}") for k in ("insertion_overshoot", "press_duration", "settle_time")
+    )
+    if has_target and overshoot and press is not None and settle is not None and press > settle:
+        return (
+            f"task.press_duration must be at most task.settle_time = {settle:g} s (the press of "
+            f"task.insertion_overshoot happens while the run settles); got {press:g}."
+        )
+    return None
+
+
+def per_joint_problems(cfg: DictConfig, joints: int | None = None) -> list[str]:
+    """The per-joint lists (the robot's, and controller=hqp's posture gains) without one value
+    per joint: against the robot's ``joints`` when its model is known (run.preflight, the
+    simulation), else against the other lists (the config alone)."""
+    per_joint = PER_JOINT + ("controller.K_ji", "controller.D_ji")  # the last two: controller=hqp
+    lengths = {key: len(v) for key in per_joint if isinstance(v := _get(cfg, key), list)}
+    if joints is not None:
+        return [
+            f"{key} has {n} values; robot {_get(cfg, 'robot.name')} has {joints} joints: give one value per joint."
+            for key, n in lengths.items()
+            if n != joints
+        ]
+    if len(set(lengths.values())) < 2:
+        return []
+    counts = list(lengths.values())  # name the odd ones against the most common length
+    joints = max(set(counts), key=counts.count)
+    agree = ", ".join(k for k, n in lengths.items() if n == joints)
+    return [
+        f"{key} has {n} values; the other per-joint settings ({agree}) have {joints}: give one value per joint."
+        for key, n in lengths.items()
+        if n != joints
+    ]
 
 
 def _files(cfg: DictConfig, has_target: bool) -> list[str]:

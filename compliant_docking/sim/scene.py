@@ -198,7 +198,7 @@ def socket_pose(cfg: DictConfig) -> SocketPose | None:
         if not offset.is_zero:
             raise ValueError("task.misalignment needs a socket (target=none has none)")
         return None
-    nominal = mount_placement(cfg.target.pos, cfg.target.quat)
+    nominal = mount_placement(cfg.target.pos, cfg.target.quat, "target.quat")
     return SocketPose(true=offset.apply(nominal), believed=nominal, misalignment=offset)
 
 
@@ -284,7 +284,7 @@ def build_scene(cfg: DictConfig) -> Scene:
     tool_spec, source, key = _load_fragment("tool", cfg.tool, contact)
     tool = rigid_tool(tool_spec, source)
     tool_spec, _, _ = _load_fragment("tool", cfg.tool, contact)
-    mount = mount_placement(cfg.tool.mount_pos, cfg.tool.mount_quat)
+    mount = mount_placement(cfg.tool.mount_pos, cfg.tool.mount_quat, "tool.mount_quat")
     tool_root = tool_spec.body("dock")
     tool_root.pos = mount.translation.tolist()
     tool_root.quat = pin.Quaternion(mount.rotation).coeffs()[[3, 0, 1, 2]].tolist()

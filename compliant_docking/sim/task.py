@@ -6,6 +6,9 @@ import numpy as np
 import pinocchio as pin
 from omegaconf import DictConfig
 
+from compliant_docking.config.ranges import require
+from compliant_docking.config.schemas import TaskConfig
+from compliant_docking.config.validate import quaternion_problem
 from compliant_docking.planning.base import Planner, Waypoints
 from compliant_docking.sim.geometry.fragment import MATED
 from compliant_docking.sim.scene import Scene
@@ -96,8 +99,9 @@ def _with_axis(rot: np.ndarray, z_axis: np.ndarray) -> np.ndarray:
 
 def _quat_matrix(quat, setting: str) -> np.ndarray:
     q = np.asarray(quat, dtype=float)
-    if q.shape != (4,) or not np.isfinite(q).all() or abs(np.linalg.norm(q) - 1.0) > 1e-6:
-        raise ValueError(f"{setting} must be a unit quaternion [w, x, y, z], got {list(quat)}")
+    problem = quaternion_problem(setting, q.ravel().tolist())  # the config check's rule
+    if problem:
+        raise ValueError(problem)
     return pin.Quaternion(q[0], q[1], q[2], q[3]).matrix()
 
 
@@ -106,9 +110,8 @@ def run_duration(cfg: DictConfig, planner: Planner) -> tuple[float, list[str]]:
     notes: list[str] = []
     if cfg.task.duration is None:
         return planner.duration + float(cfg.task.settle_time), notes
+    require(TaskConfig, "task", duration=cfg.task.duration)  # the config check's rule
     duration = float(cfg.task.duration)
-    if not duration > 0.0:
-        raise ValueError(f"task.duration must be > 0 s (or null to follow the trajectory), got {duration}")
     if duration < planner.duration:
         notes.append(
             f"task.duration = {duration:g} s is shorter than the trajectory "
@@ -124,6 +127,5 @@ def hold_extension(cfg: DictConfig, planner: Planner) -> float:
     if planner.lead_limit is None or cfg.task.duration is not None:
         return 0.0
     max_hold = float(cfg.task.get("max_hold", 0.0))
-    if not max_hold >= 0.0:
-        raise ValueError(f"task.max_hold must be >= 0 s, got {max_hold}")
+    require(TaskConfig, "task", max_hold=max_hold)  # the config check's rule
     return max_hold

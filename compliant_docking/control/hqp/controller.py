@@ -111,7 +111,9 @@ class HQPController(Controller):
             observer_ki=observer_ki, preload_force=preload_force, preload_ramp_s=preload_ramp_s,
             contact_deadband=contact_deadband, condition_threshold=condition_threshold,
         )  # fmt: skip
-        require(RobotConfig, "robot", velocity_limits=context.velocity_limits, max_torque=context.torque_limits)
+        require(
+            RobotConfig, "robot", velocity_limits=context.velocity_limits, max_torque=context.torque_limits
+        )
         self.K0 = vector_setting(K0, 6, "controller.K0")
         self.min_stiffness_ratio, self.sigmoid_gain = float(K_min_ratio), float(k_alpha)
         self.deadband = float(contact_deadband)
