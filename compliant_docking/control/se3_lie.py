@@ -91,8 +91,7 @@ import numpy as np
 from scipy.linalg import cho_factor, cho_solve
 
 from compliant_docking.config import SE3Formulation as Formulation
-from compliant_docking.config.ranges import require
-from compliant_docking.config.schemas import SE3LieConfig
+from compliant_docking.config import ranges, schemas
 from compliant_docking.control import lie
 from compliant_docking.control import se3_kernel as kern
 from compliant_docking.control.base import Controller, TaskInertia
@@ -151,11 +150,10 @@ class SE3LieController(Controller):
                  apparent_inertia_floor: float | None,
                  A=None, D=None, K=None, **common):
         super().__init__(context, **common)
-        diagonals = {k: v for k, v, m in (("A_diag", A_diag, A), ("D_diag", D_diag, D), ("K_diag", K_diag, K))
-                     if m is None}  # the config's; a full matrix A, D or K is checked below
-        require(SE3LieConfig, "controller", **diagonals, null_damping=null_damping,  # the schema's ranges
-                condition_threshold=condition_threshold, desired_wrench=desired_wrench,
-                apparent_inertia_floor=apparent_inertia_floor)
+        given = {"A_diag": (A_diag, A), "D_diag": (D_diag, D), "K_diag": (K_diag, K)}  # a matrix: checked below
+        ranges.require(schemas.SE3LieConfig, "controller", **{k: d for k, (d, m) in given.items() if m is None},
+                       null_damping=null_damping, condition_threshold=condition_threshold,  # the schema's ranges
+                       desired_wrench=desired_wrench, apparent_inertia_floor=apparent_inertia_floor)
         self.A = _matrix(A_diag if A is None else A, "A_diag" if A is None else "A")
         self.D = _matrix(D_diag if D is None else D, "D_diag" if D is None else "D")
         self.K = _matrix(K_diag if K is None else K, "K_diag" if K is None else "K")
