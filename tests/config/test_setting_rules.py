@@ -1,9 +1,12 @@
-"""One rule per parameter: a controller's constructor refuses a setting with the range its
-schema field declares, in the config check's own words (``config.ranges.require``).
+"""One rule per parameter: a controller's or planner's constructor refuses a setting with
+the range its schema field declares, in the config check's own words
+(``config.ranges.require``); a relation the run checks again (the press within the settle
+time, a unit quaternion, the per-joint lengths) is one function of the config check.
 
 Each case is a value the config check refuses; the constructor, given the same value
 (built from Python without the check), must refuse it with the same sentence. The first
-group are the rules that used to differ: the constructor took what the schema refuses.
+group of each list are the rules that used to differ: the constructor took what the
+schema refuses.
 """
 
 from __future__ import annotations
@@ -14,8 +17,10 @@ import numpy as np
 import pytest
 from hydra.utils import instantiate
 
-from compliant_docking.config.validate import check
+from compliant_docking.config.validate import check, per_joint_problems
 from compliant_docking.sim import simulate
+from compliant_docking.sim.models import mount_placement
+from compliant_docking.sim.task import nominal_waypoints
 from tests.helpers import make_cfg
 
 FREE_SPACE = ("target=none", "trajectory=hold", "task.init_pos=[0.55,0.0,0.35]", "task.settle_time=0.0")
@@ -84,3 +89,62 @@ def test_the_defaults_pass_both(context):
         cfg = make_cfg(*FREE_SPACE, f"controller={controller}")
         assert not check(cfg)
         instantiate(cfg.controller, _partial_=True, _convert_="all")(context=context)
+
+
+#: (the key refused, the overrides giving it a value outside its range or relation)
+PLANNER_CASES = [
+    # the tracking planner took any radius ≥ 0 and never looked at the centre's offset
+    ("trajectory.circle_radius", ("trajectory=tracking", "trajectory.circle_radius=2")),
+    ("trajectory.circle_center_offset", ("trajectory=tracking", "trajectory.circle_center_offset=5")),
+    ("trajectory.figure8_frequency", ("trajectory=tracking", "trajectory.figure8_frequency=-1")),
+    ("trajectory.duration", ("trajectory=hold", "trajectory.duration=0")),
+    ("trajectory.lead_limit", ("trajectory=quintic", "trajectory.lead_limit=0")),
+    ("trajectory.standoff", ("trajectory=twophase", "trajectory.standoff=-0.01")),
+    ("trajectory.omega_max_docking", ("trajectory=se3topp", "trajectory.omega_max_docking=0")),
+]
+DOCKING = ("task.progress=false",)
+
+
+@pytest.mark.parametrize("key, overrides", PLANNER_CASES, ids=[o[-1] for _, o in PLANNER_CASES])
+def test_the_planner_refuses_in_the_config_checks_words(key, overrides):
+    free = overrides[0] in ("trajectory=tracking", "trajectory=hold")
+    cfg = make_cfg(*(FREE_SPACE[:1] + FREE_SPACE[2:] if free else DOCKING), *overrides)
+    refused = [p for p in check(cfg) if _about(key, p)]
+    assert refused, f"the config check accepts {overrides}"
+    with pytest.raises(ValueError) as refusal:
+        simulate.plan(cfg, nominal_waypoints(cfg))
+    assert str(refusal.value) == " ".join(refused)
+
+
+def test_the_press_is_refused_in_the_config_checks_words():
+    """task.press_duration at most task.settle_time: one function for the check and the run."""
+    cfg = make_cfg("task.press_duration=5", "task.settle_time=1")
+    refused = [p for p in check(cfg) if _about("task.press_duration", p)]
+    assert len(refused) == 1
+    with pytest.raises(ValueError) as refusal:
+        simulate.plan(cfg, nominal_waypoints(cfg))
+    assert str(refusal.value) == refused[0]
+
+
+@pytest.mark.parametrize("key", ["target.quat", "tool.mount_quat"])
+def test_a_quaternion_is_refused_in_the_config_checks_words(key):
+    cfg = make_cfg(f"{key}=[1,0,0,0.1]")
+    refused = [p for p in check(cfg) if _about(key, p)]
+    assert len(refused) == 1
+    with pytest.raises(ValueError) as refusal:
+        mount_placement([0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.1], key)
+    assert str(refusal.value) == refused[0]
+
+
+def test_per_joint_lengths_are_one_rule():
+    """The same function judges the lists against each other (the config alone) and against
+    the robot's joints (preflight, the simulation): both name the odd list."""
+    cfg = make_cfg("controller=hqp", "controller.K_ji=[5,5,5,5,5,5]")
+    assert [p for p in check(cfg) if _about("controller.K_ji", p)] == [
+        "controller.K_ji has 6 values; the other per-joint settings (robot.velocity_limits, "
+        "robot.torque_limits, robot.max_torque, robot.ik_guess, controller.D_ji) have 7: "
+        "give one value per joint."
+    ]
+    assert per_joint_problems(cfg, 7) == [
+        "controller.K_ji has 6 values; robot iiwa14 has 7 joints: give one value per joint."
+    ]
