@@ -28,7 +28,7 @@ LAYERS = (
     "results",
     "env",
     "sweep",
-    "tracking",
+    "logger",
     "tune",
     "cli",
 )
