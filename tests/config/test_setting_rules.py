@@ -34,7 +34,6 @@ CASES = [
     ("hqp", "robot.max_torque", "robot.max_torque=[10,10,10,10,10,10,0]"),
     ("impedance", "controller.d", "controller.d=nan"),
     ("impedance", "controller.k_rot", "controller.k_rot=-inf"),
-    ("se3_lie", "controller.null_damping", "controller.null_damping=nan"),
     # condition_threshold > 1: one rule (config.schemas.CONDITION), was in five places
     ("impedance", "controller.condition_threshold", "controller.condition_threshold=1.0"),
     ("hqp", "controller.condition_threshold", "controller.condition_threshold=0.5"),
@@ -48,6 +47,7 @@ CASES = [
     ("hqp", "controller.K_ji", "controller.K_ji=[5,5,5,5,5,5,-1]"),
     ("impedance", "controller.m_rot", "controller.m_rot=0"),
     ("impedance", "controller.apparent_inertia_floor", "controller.apparent_inertia_floor=0"),
+    ("se3_lie", "controller.null_damping", "controller.null_damping=nan"),
     ("se3_lie", "controller.A_diag", "controller.A_diag=[10,10,10,1,1,0]"),
     ("se3_lie", "controller.K_diag", "controller.K_diag=[50,50,-1,25,25,25]"),
     ("se3_lie", "controller.desired_wrench", "controller.desired_wrench=[0,0,0,0,0]"),
