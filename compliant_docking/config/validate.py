@@ -267,7 +267,7 @@ def _relations(cfg: DictConfig) -> list[str]:
         )
     press = press_problem(cfg, has_target)
     found += [press] if press else []
-    found += _misalignment(cfg, has_target)
+    found += misalignment_problems(_get(cfg, "task.misalignment"), has_target)
     found += robustness.problems(cfg)  # sensor, model_error, dynamics
     found += _interface(cfg, has_target)
     found += _files(cfg, has_target)
@@ -352,14 +352,16 @@ def _files(cfg: DictConfig, has_target: bool) -> list[str]:
     return found
 
 
-def _misalignment(cfg: DictConfig, has_target: bool) -> list[str]:
-    settings = _get(cfg, "task.misalignment")
-    if not isinstance(settings, dict):
+def misalignment_problems(settings: Any, has_target: bool) -> list[str]:
+    """The relations of ``task.misalignment`` (a dict or DictConfig; its ranges are the
+    schema's): a range [low, high], a value or its range, a socket to misalign (the config
+    check, the draw and the scene ask)."""
+    if settings is None or not hasattr(settings, "get"):
         return []
     found = []
     for name in ("x", "y", "yaw_deg", "tilt_deg"):
         key = f"task.misalignment.{name}"
-        bounds = settings.get(f"{name}_range")
+        bounds = None if settings.get(f"{name}_range") is None else list(settings.get(f"{name}_range"))
         if bounds is not None and len(bounds) == 2 and bounds[0] > bounds[1]:
             found.append(f"{key}_range must be [low, high] with low <= high; got {show(bounds)}.")
         if bounds is not None and settings.get(name):

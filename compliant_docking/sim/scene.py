@@ -33,6 +33,7 @@ from omegaconf import DictConfig, OmegaConf
 from compliant_docking import looked_in, resolve_path
 from compliant_docking.config.geometry import PlugGeometry, SocketGeometry, check_fit
 from compliant_docking.config.keyed import KeyedPlugGeometry, KeyedSocketGeometry, check_keyed_fit
+from compliant_docking.config.validate import misalignment_problems
 from compliant_docking.sim.dynamics import draw as contact_draw
 from compliant_docking.sim.geometry import build_plug, build_socket
 from compliant_docking.sim.geometry.fragment import Key, read_key
@@ -193,10 +194,12 @@ def socket_pose(cfg: DictConfig) -> SocketPose | None:
     believed = ``target.pos``/``target.quat``; true = believed · the misalignment of
     ``task.misalignment`` (fixed or drawn with its seed; compliant_docking/sim/misalignment.py).
     """
-    offset = draw(cfg.task.get("misalignment"))
+    settings = cfg.task.get("misalignment")
+    offset = draw(settings)
     if cfg.target.name == "none":
-        if not offset.is_zero:
-            raise ValueError("task.misalignment needs a socket (target=none has none)")
+        needs_socket = misalignment_problems(settings, has_target=False)  # the config check's rule
+        if needs_socket:
+            raise ValueError(" ".join(needs_socket))
         return None
     nominal = mount_placement(cfg.target.pos, cfg.target.quat, "target.quat")
     return SocketPose(true=offset.apply(nominal), believed=nominal, misalignment=offset)
