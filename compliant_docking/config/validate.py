@@ -257,14 +257,7 @@ def _relations(cfg: DictConfig) -> list[str]:
         if isinstance(quat, list) and len(quat) == 4 and (problem := quaternion_problem(key, quat)):
             found.append(problem)
     has_target = _get(cfg, "target.name") not in (None, "none")
-    stroke = _get(cfg, "task.stroke")
-    if has_target and isinstance(stroke, list) and not any(stroke):
-        found.append(f"task.stroke must be a non-zero vector (start → seat) [m]; got {show(stroke)}.")
-    if not has_target and _get(cfg, "task.init_pos") is None:
-        found.append(
-            "task.init_pos must be set when there is no target (target=none): the start pose "
-            "cannot be derived from a socket; got null."
-        )
+    found += start_problems(cfg, has_target)
     press = press_problem(cfg, has_target)
     found += [press] if press else []
     found += misalignment_problems(_get(cfg, "task.misalignment"), has_target)
@@ -287,6 +280,20 @@ def torque_margin_problem(max_torque: list[float], eps_abs: float) -> str | None
         f"robot.max_torque must exceed 4·controller.eps_abs = {4 * eps_abs:g} N·m for every joint (the "
         f"QP keeps twice its accuracy inside the clip); got {show(max_torque)}."
     )
+
+
+def start_problems(cfg: DictConfig, has_target: bool) -> list[str]:
+    """Why the task's start and goal cannot be placed: a zero ``task.stroke`` with a socket,
+    no ``task.init_pos`` without one (the config check and sim/task.py ask)."""
+    stroke = _get(cfg, "task.stroke")
+    if has_target and isinstance(stroke, list) and not any(stroke):
+        return [f"task.stroke must be a non-zero vector (start → seat) [m]; got {show(stroke)}."]
+    if not has_target and _get(cfg, "task.init_pos") is None:
+        return [
+            "task.init_pos must be set when there is no target (target=none): the start pose "
+            "cannot be derived from a socket; got null."
+        ]
+    return []
 
 
 def quaternion_problem(key: str, quat: list[float]) -> str | None:

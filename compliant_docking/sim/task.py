@@ -8,7 +8,7 @@ from omegaconf import DictConfig
 
 from compliant_docking.config.ranges import require
 from compliant_docking.config.schemas import TaskConfig
-from compliant_docking.config.validate import quaternion_problem
+from compliant_docking.config.validate import quaternion_problem, start_problems
 from compliant_docking.planning.base import Planner, Waypoints
 from compliant_docking.sim.geometry.fragment import MATED
 from compliant_docking.sim.scene import Scene
@@ -27,12 +27,10 @@ def task_waypoints(cfg: DictConfig, scene: Scene) -> Waypoints:
     stroke = np.asarray(task.stroke, dtype=float)
     length = float(np.linalg.norm(stroke))
     guess = scene.arm.tcp_placement(np.asarray(cfg.robot.ik_guess, dtype=float)).rotation
+    unplaced = start_problems(cfg, has_target=scene.socket is not None)  # the config check's rule
+    if unplaced:
+        raise ValueError(unplaced[0])
     if scene.socket is None:
-        if task.init_pos is None:
-            raise ValueError(
-                "task.init_pos must be set when there is no target (target=none): "
-                "the start pose cannot be derived from a socket"
-            )
         rot = (
             _quat_matrix(task.init_quat, "task.init_quat")
             if task.init_quat is not None
@@ -41,8 +39,6 @@ def task_waypoints(cfg: DictConfig, scene: Scene) -> Waypoints:
         axis = stroke / length if length > 0 else rot[:, 2]
         return Waypoints(start=pin.SE3(rot, np.asarray(task.init_pos, float)), goal=None, axis=axis)
 
-    if not length > 0.0:
-        raise ValueError(f"task.stroke must be a non-zero vector, got {stroke.tolist()}")
     axis = stroke / length
     seat = scene.socket.believed
     if task.init_pos is None:
