@@ -239,7 +239,8 @@ GROUPS = {
     "model_error": "the controller's model against the plant (none: exact)",
     "dynamics": "the plug-socket contact drawn per seed (nominal: as configured)",
     "experiment": "presets, added with +experiment=NAME",
-    "tracking": "experiment tracking, added with +tracking=mlflow",
+    "logger": "log every job to MLflow, added with +logger=mlflow",
+    "tracking": "deprecated: +tracking=mlflow is the old spelling of +logger=mlflow",
     "robot_controller": "per-robot gains, applied automatically as ${robot}_${controller}",
 }
 #: groups that are not for composing by hand
@@ -260,7 +261,7 @@ Examples:
   compliant-docking -m <same overrides> resume=last          (finish an interrupted sweep)
   compliant-docking -m <overrides> hydra/launcher=submitit_slurm hydra.launcher.partition=P
   compliant-docking -m +experiment=tune                      (tune gains with Optuna: docs/tuning.md)
-  compliant-docking +tracking=mlflow ...                     (log to MLflow: docs/tracking.md)
+  compliant-docking +logger=mlflow ...                       (log to MLflow: docs/logger.md)
   python -m compliant_docking.report runs/multirun/<date>/<time>      (tables and figures again)
 
 Exit status (the same for every command; docs/exit_codes.md):

@@ -16,7 +16,7 @@ EXTRAS = {
     "cluster": "hydra/launcher=submitit_slurm (or submitit_local)",
     "video": "render=video",
     "tune": "hydra/sweeper=optuna (+experiment=tune)",
-    "tracking": "+tracking=mlflow",
+    "logger": "+logger=mlflow",
     "cad": "the CAD converter (python -m compliant_docking.interface)",
     "notebook": "make notebook",
     "env": "the Gymnasium environment (compliant_docking.env)",

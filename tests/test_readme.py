@@ -247,7 +247,7 @@ def test_the_readme_commands_run_as_printed_shortened(tmp_path):
             or "resume=" in command
             or ("-m" in argv and any(a.startswith("+experiment=") for a in argv))
         ):
-            continue  # a cluster, a server, a search space: tests/sweep, tests/tracking, tests/tune
+            continue  # a cluster, a server, a search space: tests/sweep, tests/logger, tests/tune
         swept = "-m" in argv
         shorter = SHORTER_TRACKING if "+experiment=tracking_gate" in argv else SHORTER
         extra = [*shorter, f"hydra.{'sweep' if swept else 'run'}.dir={tmp_path / str(len(ran))}"]

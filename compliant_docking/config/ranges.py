@@ -213,6 +213,27 @@ def show(value: Any) -> str:
     return repr(value) if isinstance(value, str) else str(value)
 
 
+def require(schema: type, group: str, **values: Any) -> None:
+    """The check a constructor makes of its settings: each value of ``values`` against the
+    range its field of the dataclass ``schema`` declares, named ``<group>.<field>``; raises
+    one ValueError with :func:`problems`' sentences, word for word the config check's
+    refusal of the same value (:func:`compliant_docking.config.validate.check`). The
+    schema's range is the one rule; constructors never write their own copy::
+
+        require(HQPConfig, "controller", K0=K0, dt_p=dt_p)
+
+    numpy values are compared as the Python numbers and lists they hold."""
+    declared = {f.name: field_range(f) for f in dataclasses.fields(schema)}
+    found: list[str] = []
+    for name, value in values.items():
+        rng = declared[name]
+        if rng is None:
+            raise TypeError(f"{schema.__name__}.{name} declares no range")
+        found += problems(f"{group}.{name}", value.tolist() if hasattr(value, "tolist") else value, rng)
+    if found:
+        raise ValueError(" ".join(found))
+
+
 def object_problems(obj: Any, where: str) -> list[str]:
     """Every declared range of the dataclass instance ``obj``, its fields named
     ``<where>.<field>`` (a config key, or the class name for programmatic use)."""

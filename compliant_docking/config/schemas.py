@@ -37,8 +37,9 @@ from compliant_docking.config.geometry import (
 )
 from compliant_docking.config.keyed import KeyedPlugGeometry, KeyedSocketGeometry
 from compliant_docking.config.ranges import (
-    above,
+    Range,
     at_least,
+    declared,
     finite,
     inside,
     integers,
@@ -131,12 +132,14 @@ class PhysicsConfig:
     tolerance: float = within(0.0, 1.0, high_open=True)
     sdf_iterations: int = integers(1, 1000)
     sdf_initpoints: int = integers(1, 1000)
-    # MuJoCo's bounding-volume midphase pays off for large meshes; for the handful of
-    # convex pieces of a docking interface it only costs time (results are identical).
+    # the midphase pays off for big meshes; for an interface's few convex pieces it costs time (same results)
     midphase: bool = MISSING
 
 
 # --------------------------------------------------------------------------- controllers
+CONDITION = Range(low=1.0, low_open=True)  # every controller's condition_threshold (Λ's fallback)
+
+
 @dataclass
 class ControllerConfig:
     """Fields every controller accepts."""
@@ -165,7 +168,7 @@ class ImpedanceConfig(ControllerConfig):
     d_rot: float = at_least(0.0, unit="N·m·s/rad")
     k_rot: float = at_least(0.0, unit="N·m/rad")
     null_damping: float = at_least(0.0)
-    condition_threshold: float = above(1.0)  # cond(J M⁻¹ Jᵀ) above which Λ uses a damped pseudo-inverse
+    condition_threshold: float = declared(CONDITION)  # cond(J M⁻¹ Jᵀ) past which Λ is a damped pseudo-inverse
     # keep the apparent inertia W ⪰ ratio·Λ (docs/controllers/impedance.md); null: the law of §1
     apparent_inertia_floor: Optional[float] = positive()
 
@@ -201,7 +204,7 @@ class HQPConfig(ControllerConfig):
     preload_force: float = at_least(0.0, unit="N")  # [N] along the docking axis; 0: off
     preload_ramp_s: float = positive(unit="s")  # [s]
     contact_deadband: float = at_least(0.0, unit="N")  # [N] subtracted from the wrench norm
-    condition_threshold: float = above(1.0)  # cond(J M⁻¹ Jᵀ) above which Λ's eigenvalues are floored
+    condition_threshold: float = declared(CONDITION)  # cond(J M⁻¹ Jᵀ) above which Λ's eigenvalues are floored
     null_space_metric: NullSpaceMetric = MISSING
     solve_every_step: bool = MISSING  # call ProxQP even when the closed-form optimum meets every row
 
@@ -215,7 +218,7 @@ class SE3LieConfig(ControllerConfig):
     D_diag: List[float] = at_least(0.0, size=6)  # [N·s/m | N·m·s/rad]
     K_diag: List[float] = at_least(0.0, size=6)  # [N/m | N·m/rad]
     null_damping: float = at_least(0.0, unit="1/s")  # null-space joint acceleration damping q̈ = −b·v [1/s]
-    condition_threshold: float = above(1.0)  # cond(J_b M⁻¹ J_bᵀ) above which Λ uses a damped pseudo-inverse
+    condition_threshold: float = declared(CONDITION)  # cond(J_b M⁻¹ J_bᵀ) past which Λ is damped
     desired_wrench: List[float] = finite(size=6)  # F_d in the desired TCP frame [N, N·m]
     formulation: SE3Formulation = MISSING  # twist | lambda_space (same law)
     # keep the apparent inertia A ⪰ ratio·Λ_b (docs/controllers/se3_lie.md); null: the law of §3
@@ -308,9 +311,8 @@ class DockingGateConfig:
     key_yaw_tolerance_deg: Optional[float] = positive(at_most=180.0, unit="deg")
     # a calm hold over the steady window (evaluation/contact.py; docs/run_directory.md)
     max_contact_events_per_s: float = at_least(0.0, unit="1/s")  # contact make/break events per second
-    max_force_std_N: float = at_least(
-        0.0, unit="N"
-    )  # std of |f| allowed: max(max_force_std_N, ratio × mean |f|)
+    # std of |f| allowed: max(max_force_std_N, ratio × mean |f|)
+    max_force_std_N: float = at_least(0.0, unit="N")
     max_force_std_ratio: float = at_least(0.0)
 
 
@@ -374,12 +376,10 @@ class TaskConfig:
     # the longest a held (bounded) reference extends the run, so the settle time stays whole [s]
     max_hold: float = at_least(0.0, unit="s")
     steady_window: float = positive(unit="s")  # window at the end for the steady-state metrics [s]
-    strike_window: float = positive(
-        unit="s"
-    )  # cap of the first strike after first contact (evaluation/contact.py)
-    force_window: float = positive(
-        at_most=1.0, unit="s"
-    )  # the filtered peak force: the peak of the axial force's mean over this window [s]
+    # cap of the first strike after first contact (evaluation/contact.py)
+    strike_window: float = positive(unit="s")
+    # the filtered peak force: the peak of the axial force's mean over this window [s]
+    force_window: float = positive(at_most=1.0, unit="s")
     gate: DockingGateConfig = MISSING
     tracking_gate: TrackingThresholds = MISSING  # trajectory=tracking
     misalignment: MisalignmentConfig = MISSING  # true vs believed socket pose

@@ -251,54 +251,96 @@ def _get(cfg: DictConfig, key: str) -> Any:
 
 def _relations(cfg: DictConfig) -> list[str]:
     """Checks that involve several settings (ranges are fine when this runs)."""
-    found: list[str] = []
-    per_joint = PER_JOINT + ("controller.K_ji", "controller.D_ji")  # the last two: controller=hqp
-    lengths = {key: len(v) for key in per_joint if isinstance(v := _get(cfg, key), list)}
-    if len(set(lengths.values())) > 1:  # name the odd ones against the most common length
-        counts = [n for n in lengths.values()]
-        joints = max(set(counts), key=counts.count)
-        agree = ", ".join(k for k, n in lengths.items() if n == joints)
-        for key, n in lengths.items():
-            if n != joints:
-                found.append(
-                    f"{key} has {n} values; the other per-joint settings ({agree}) have {joints}: "
-                    "give one value per joint."
-                )
+    found = per_joint_problems(cfg)
     for key in QUATERNIONS:
         quat = _get(cfg, key)
-        if isinstance(quat, list) and len(quat) == 4 and abs(math.hypot(*quat) - 1.0) > UNIT_TOLERANCE:
-            found.append(
-                f"{key} must be a unit quaternion [w, x, y, z] (norm 1 within {UNIT_TOLERANCE:g}); "
-                f"got {show(quat)} (norm {math.hypot(*quat):.6g})."
-            )
+        if isinstance(quat, list) and len(quat) == 4 and (problem := quaternion_problem(key, quat)):
+            found.append(problem)
     has_target = _get(cfg, "target.name") not in (None, "none")
-    stroke = _get(cfg, "task.stroke")
-    if has_target and isinstance(stroke, list) and not any(stroke):
-        found.append(f"task.stroke must be a non-zero vector (start → seat) [m]; got {show(stroke)}.")
-    if not has_target and _get(cfg, "task.init_pos") is None:
-        found.append(
-            "task.init_pos must be set when there is no target (target=none): the start pose "
-            "cannot be derived from a socket; got null."
-        )
-    overshoot, press, settle = (
-        _get(cfg, f"task.{k}") for k in ("insertion_overshoot", "press_duration", "settle_time")
-    )
-    if has_target and overshoot and press is not None and settle is not None and press > settle:
-        found.append(
-            f"task.press_duration must be at most task.settle_time = {settle:g} s (the press of "
-            f"task.insertion_overshoot happens while the run settles); got {press:g}."
-        )
-    found += _misalignment(cfg, has_target)
+    found += start_problems(cfg, has_target)
+    press = press_problem(cfg, has_target)
+    found += [press] if press else []
+    found += misalignment_problems(_get(cfg, "task.misalignment"), has_target)
     found += robustness.problems(cfg)  # sensor, model_error, dynamics
     found += _interface(cfg, has_target)
     found += _files(cfg, has_target)
     eps_abs, max_torque = _get(cfg, "controller.eps_abs"), _get(cfg, "robot.max_torque")
-    if isinstance(eps_abs, (int, float)) and isinstance(max_torque, list) and min(max_torque) <= 4 * eps_abs:
-        found.append(  # controller=hqp keeps 2·eps_abs inside the torque clip (control/hqp/controller.py)
-            f"robot.max_torque must exceed 4·controller.eps_abs = {4 * eps_abs:g} N·m for every joint (the "
-            f"QP keeps twice its accuracy inside the clip); got {show(max_torque)}."
+    hqp = isinstance(eps_abs, (int, float)) and isinstance(max_torque, list)
+    margin = torque_margin_problem(max_torque, eps_abs) if hqp else None
+    return found + [margin] if margin else found
+
+
+def torque_margin_problem(max_torque: list[float], eps_abs: float) -> str | None:
+    """controller=hqp keeps 2·eps_abs inside the torque clip (control/hqp/controller.py):
+    why ``robot.max_torque`` leaves no room for it, or None (the config check and the
+    controller's constructor both ask this)."""
+    if min(max_torque) > 4 * eps_abs:
+        return None
+    return (
+        f"robot.max_torque must exceed 4·controller.eps_abs = {4 * eps_abs:g} N·m for every joint (the "
+        f"QP keeps twice its accuracy inside the clip); got {show(max_torque)}."
+    )
+
+
+def start_problems(cfg: DictConfig, has_target: bool) -> list[str]:
+    """Why the task's start and goal cannot be placed: a zero ``task.stroke`` with a socket,
+    no ``task.init_pos`` without one (the config check and sim/task.py ask)."""
+    stroke = _get(cfg, "task.stroke")
+    if has_target and isinstance(stroke, list) and not any(stroke):
+        return [f"task.stroke must be a non-zero vector (start → seat) [m]; got {show(stroke)}."]
+    if not has_target and _get(cfg, "task.init_pos") is None:
+        return [
+            "task.init_pos must be set when there is no target (target=none): the start pose "
+            "cannot be derived from a socket; got null."
+        ]
+    return []
+
+
+def quaternion_problem(key: str, quat: list[float]) -> str | None:
+    """Why the setting ``key`` is not a unit quaternion [w, x, y, z], or None (the config
+    check and the scene's and task's constructions ask)."""
+    if len(quat) == 4 and all(map(math.isfinite, quat)) and abs(math.hypot(*quat) - 1.0) <= UNIT_TOLERANCE:
+        return None
+    norm = f" (norm {math.hypot(*quat):.6g})" if len(quat) == 4 else ""
+    return f"{key} must be a unit quaternion [w, x, y, z] (norm 1 within {UNIT_TOLERANCE:g}); got {show(quat)}{norm}."
+
+
+def press_problem(cfg: DictConfig, has_target: bool) -> str | None:
+    """Why the press past the seat does not fit in the settle time, or None (the config
+    check and the planner's construction, compliant_docking/sim/simulate.py, both ask)."""
+    overshoot, press, settle = (
+        _get(cfg, f"task.{k}") for k in ("insertion_overshoot", "press_duration", "settle_time")
+    )
+    if has_target and overshoot and press is not None and settle is not None and press > settle:
+        return (
+            f"task.press_duration must be at most task.settle_time = {settle:g} s (the press of "
+            f"task.insertion_overshoot happens while the run settles); got {press:g}."
         )
-    return found
+    return None
+
+
+def per_joint_problems(cfg: DictConfig, joints: int | None = None) -> list[str]:
+    """The per-joint lists (the robot's, and controller=hqp's posture gains) without one value
+    per joint: against the robot's ``joints`` when its model is known (run.preflight, the
+    simulation), else against the other lists (the config alone)."""
+    per_joint = PER_JOINT + ("controller.K_ji", "controller.D_ji")  # the last two: controller=hqp
+    lengths = {key: len(v) for key in per_joint if isinstance(v := _get(cfg, key), list)}
+    if joints is not None:
+        return [
+            f"{key} has {n} values; robot {_get(cfg, 'robot.name')} has {joints} joints: give one value per joint."
+            for key, n in lengths.items()
+            if n != joints
+        ]
+    if len(set(lengths.values())) < 2:
+        return []
+    counts = list(lengths.values())  # name the odd ones against the most common length
+    joints = max(set(counts), key=counts.count)
+    agree = ", ".join(k for k, n in lengths.items() if n == joints)
+    return [
+        f"{key} has {n} values; the other per-joint settings ({agree}) have {joints}: give one value per joint."
+        for key, n in lengths.items()
+        if n != joints
+    ]
 
 
 def _files(cfg: DictConfig, has_target: bool) -> list[str]:
@@ -317,14 +359,16 @@ def _files(cfg: DictConfig, has_target: bool) -> list[str]:
     return found
 
 
-def _misalignment(cfg: DictConfig, has_target: bool) -> list[str]:
-    settings = _get(cfg, "task.misalignment")
-    if not isinstance(settings, dict):
+def misalignment_problems(settings: Any, has_target: bool) -> list[str]:
+    """The relations of ``task.misalignment`` (a dict or DictConfig; its ranges are the
+    schema's): a range [low, high], a value or its range, a socket to misalign (the config
+    check, the draw and the scene ask)."""
+    if settings is None or not hasattr(settings, "get"):
         return []
     found = []
     for name in ("x", "y", "yaw_deg", "tilt_deg"):
         key = f"task.misalignment.{name}"
-        bounds = settings.get(f"{name}_range")
+        bounds = None if settings.get(f"{name}_range") is None else list(settings.get(f"{name}_range"))
         if bounds is not None and len(bounds) == 2 and bounds[0] > bounds[1]:
             found.append(f"{key}_range must be [low, high] with low <= high; got {show(bounds)}.")
         if bounds is not None and settings.get(name):

@@ -100,11 +100,11 @@ class TaskInertia:
     condition number every ``check_every`` steps, and every step while it is above
     the threshold (it changes smoothly with the posture: at 1 kHz, ten steps are 10 ms).
     Steps using the fallback and the largest condition number seen are reported.
+    ``threshold`` > 1: the range of ``controller.condition_threshold``
+    (``config.schemas.CONDITION``), which the controllers check.
     """
 
     def __init__(self, threshold: float, check_every: int = 10):
-        if not threshold > 1.0:
-            raise ValueError(f"condition_threshold must be > 1, got {threshold}")
         self.threshold = float(threshold)
         self.check_every = int(check_every)
         self.fallback_steps = 0
@@ -218,16 +218,12 @@ class Controller(ABC):
         return {}
 
 
-def vector_setting(values, size: int, label: str, minimum: float | None = None) -> np.ndarray:
-    """A float vector of the given size (a scalar is broadcast), finite and ≥ minimum; the
-    error names ``controller.<label>``."""
+def vector_setting(values, size: int, key: str) -> np.ndarray:
+    """A float vector of the given size (a scalar is broadcast) for the setting ``key``
+    (its range is the schema's, checked by the constructor: ``config.ranges.require``)."""
     arr = np.asarray(values, dtype=float)
     if arr.ndim == 0:
         arr = np.full(size, float(arr))
     if arr.shape != (size,) or not np.isfinite(arr).all():
-        raise ValueError(
-            f"controller.{label} must be {size} finite numbers, got {list(np.atleast_1d(values))}"
-        )
-    if minimum is not None and np.any(arr < minimum):
-        raise ValueError(f"controller.{label} must be ≥ {minimum:g}, got {arr.tolist()}")
+        raise ValueError(f"{key} must be {size} finite numbers, got {list(np.atleast_1d(values))}")
     return arr.copy()

@@ -21,6 +21,8 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
+from compliant_docking.config.ranges import require
+from compliant_docking.config.schemas import ImpedanceConfig
 from compliant_docking.control.base import Controller, TaskInertia
 from compliant_docking.control.shaping import inertia_floor
 from compliant_docking.planning.base import Reference
@@ -45,18 +47,11 @@ class ImpedanceController(Controller):
         **common,
     ):
         super().__init__(context, **common)
-        for label, value in (("m", m), ("m_rot", m_rot)):
-            if not value > 0.0:
-                raise ValueError(f"controller.{label} must be > 0, got {value}")
-        for label, value in (
-            ("d", d),
-            ("k", k),
-            ("d_rot", d_rot),
-            ("k_rot", k_rot),
-            ("null_damping", null_damping),
-        ):
-            if value < 0.0:
-                raise ValueError(f"controller.{label} must be ≥ 0, got {value}")
+        require(  # the schema's ranges: the config check's refusals, word for word
+            ImpedanceConfig, "controller", m=m, d=d, k=k, m_rot=m_rot, d_rot=d_rot, k_rot=k_rot,
+            null_damping=null_damping, condition_threshold=condition_threshold,
+            apparent_inertia_floor=apparent_inertia_floor,
+        )  # fmt: skip
         W_inv = 1.0 / np.array([m] * 3 + [m_rot] * 3, dtype=float)
         K = np.array([k] * 3 + [k_rot] * 3, dtype=float)
         D = np.array([d] * 3 + [d_rot] * 3, dtype=float)

@@ -66,8 +66,9 @@ class MomentumObserver:
 
     Args:
         context: the controller's context (arm, dt, n_steps, torque_limits).
-        kp: proportional gain K_p [1/s].
-        ki: integral gain K_i [1/s²].
+        kp: proportional gain K_p > 0 [1/s].
+        ki: integral gain K_i ≥ 0 [1/s²] (both: the ranges of ``controller.observer_kp``
+            and ``controller.observer_ki``, which the controller checks).
         integral_limit: clamp of |K_i ∫e| per joint [N·m]; None: INTEGRAL_LIMIT_FACTOR ×
             the torque clip (the integral carries the whole steady estimate, so the clamp
             bounds the external torque it can report; it only acts against wind-up).
@@ -81,8 +82,6 @@ class MomentumObserver:
         *,
         integral_limit: float | np.ndarray | None = None,
     ):
-        if not kp > 0.0 or not ki >= 0.0:
-            raise ValueError(f"observer gains need kp > 0 and ki ≥ 0, got kp={kp}, ki={ki}")
         self.arm = context.arm
         self.dt = float(context.dt)
         self.kp, self.ki = float(kp), float(ki)

@@ -91,6 +91,7 @@ import numpy as np
 from scipy.linalg import cho_factor, cho_solve
 
 from compliant_docking.config import SE3Formulation as Formulation
+from compliant_docking.config import ranges, schemas
 from compliant_docking.control import lie
 from compliant_docking.control import se3_kernel as kern
 from compliant_docking.control.base import Controller, TaskInertia
@@ -149,6 +150,10 @@ class SE3LieController(Controller):
                  apparent_inertia_floor: float | None,
                  A=None, D=None, K=None, **common):
         super().__init__(context, **common)
+        given = {"A_diag": (A_diag, A), "D_diag": (D_diag, D), "K_diag": (K_diag, K)}  # a matrix: checked below
+        ranges.require(schemas.SE3LieConfig, "controller", **{k: d for k, (d, m) in given.items() if m is None},
+                       null_damping=null_damping, condition_threshold=condition_threshold,  # the schema's ranges
+                       desired_wrench=desired_wrench, apparent_inertia_floor=apparent_inertia_floor)
         self.A = _matrix(A_diag if A is None else A, "A_diag" if A is None else "A")
         self.D = _matrix(D_diag if D is None else D, "D_diag" if D is None else "D")
         self.K = _matrix(K_diag if K is None else K, "K_diag" if K is None else "K")
@@ -161,12 +166,7 @@ class SE3LieController(Controller):
             if np.linalg.eigvalsh(m).min() < -1e-12 * max(1.0, float(np.abs(m).max())):
                 raise ValueError(f"controller.{label} must be positive semi-definite "
                                  f"(a non-negative diagonal), got diagonal {np.diag(m).tolist()}")
-        if not null_damping >= 0.0:
-            raise ValueError(f"controller.null_damping must be ≥ 0, got {null_damping}")
         F_d = np.asarray(desired_wrench, dtype=float)
-        if F_d.shape != (6,) or not np.isfinite(F_d).all():
-            raise ValueError(f"controller.desired_wrench must be 6 finite values [f; m], "
-                             f"got {np.ravel(desired_wrench).tolist()}")
         self.formulation = Formulation(formulation)
         self.desired_wrench = F_d
         self.null_damping = float(null_damping)

@@ -28,14 +28,11 @@ class ApparentInertiaFloor:
     W^½Λ⁻¹W^½ − ratio·I tells whether W ⪰ ratio·Λ already (then P = I and the vector is
     returned untouched, so the law is exactly the specified one), else one LAPACK
     ``dsyevd`` gives V and σ. Between refreshes a step costs at most one 6×6 product.
+    ``ratio`` > 0: the range of ``controller.apparent_inertia_floor``, which the
+    controllers check.
     """
 
     def __init__(self, W_diag, ratio: float, every: int = 10):
-        if not ratio > 0.0:
-            raise ValueError(
-                f"controller.apparent_inertia_floor must be > 0 (a share of the task inertia Λ), "
-                f"or null to turn the floor off; got {ratio}"
-            )
         W = np.asarray(W_diag, dtype=float)
         self.ratio = float(ratio)
         self.every = int(every)

@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
+from compliant_docking.config.ranges import require
+from compliant_docking.config.schemas import HoldConfig
 from compliant_docking.planning.base import Planner, Reference, Waypoints
 
 
 class HoldPlanner(Planner):
     def __init__(self, waypoints: Waypoints, *, duration: float, name: str):
-        if not duration > 0.0:
-            raise ValueError(f"trajectory.duration must be > 0 s, got {duration}")
+        require(HoldConfig, "trajectory", duration=duration)  # the schema's range
         self.duration = float(duration)
         self._pos = waypoints.start.translation.copy()
         self._rot = waypoints.start.rotation.copy()

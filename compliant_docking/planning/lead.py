@@ -17,6 +17,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from compliant_docking.config.ranges import require
+from compliant_docking.config.schemas import QuinticConfig
 from compliant_docking.planning.base import Planner, Reference, ReferenceTable
 
 
@@ -90,12 +92,10 @@ class LeadLimit:
 
 
 def checked_lead_limit(limit: float | None) -> float | None:
-    """``trajectory.lead_limit`` as a float (None: off); raises ValueError unless > 0."""
-    if limit is None:
-        return None
-    if not float(limit) > 0.0:
-        raise ValueError(f"trajectory.lead_limit must be > 0 m (null: the open-loop reference), got {limit}")
-    return float(limit)
+    """``trajectory.lead_limit`` as a float (None: off); raises ValueError outside the
+    schema's range (> 0 m), in the config check's words."""
+    require(QuinticConfig, "trajectory", lead_limit=limit)
+    return None if limit is None else float(limit)
 
 
 def bounded(planner: Planner, table: ReferenceTable, axis: np.ndarray) -> LeadLimit | None:

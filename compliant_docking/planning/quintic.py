@@ -7,13 +7,14 @@ from __future__ import annotations
 
 import numpy as np
 
+from compliant_docking.config.ranges import require
+from compliant_docking.config.schemas import QuinticConfig
 from compliant_docking.planning.base import (
     Planner,
     ReferenceTable,
     Waypoints,
     quintic_scaling,
 )
-from compliant_docking.planning.lead import checked_lead_limit
 
 
 class QuinticPlanner(Planner):
@@ -22,10 +23,9 @@ class QuinticPlanner(Planner):
             raise ValueError(
                 "trajectory=quintic needs a goal (a target); with target=none use trajectory=tracking"
             )
-        if not duration > 0.0:
-            raise ValueError(f"trajectory.duration must be > 0 s, got {duration}")
+        require(QuinticConfig, "trajectory", duration=duration, lead_limit=lead_limit)  # the schema's ranges
         self.duration = float(duration)
-        self.lead_limit = checked_lead_limit(lead_limit)
+        self.lead_limit = None if lead_limit is None else float(lead_limit)
         self._start = waypoints.start.translation.copy()
         self._delta = waypoints.goal.translation - self._start
         self._rot = waypoints.start.rotation.copy()

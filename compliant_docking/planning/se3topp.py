@@ -70,8 +70,9 @@ import numpy as np
 import pinocchio as pin
 from scipy.special import ellipj, ellipkinc
 
+from compliant_docking.config.ranges import require
+from compliant_docking.config.schemas import SE3ToppConfig
 from compliant_docking.planning.base import Planner, ReferenceTable, Waypoints
-from compliant_docking.planning.lead import checked_lead_limit
 from compliant_docking.planning.twophase import MIN_LENGTH, docking_waypoints, rotation_path, segment_index
 
 log = logging.getLogger(__name__)
@@ -86,16 +87,6 @@ class Limits:
     a: float
     omega: float
     alpha: float
-
-    def check(self, segment: str) -> None:
-        for label, value in (
-            ("v_max", self.v),
-            ("a_max", self.a),
-            ("omega_max", self.omega),
-            ("alpha_max", self.alpha),
-        ):
-            if not value > 0.0:
-                raise ValueError(f"trajectory.{label}_{segment} must be > 0, got {value}")
 
 
 def bang_bang_time(v_s: float, a_s: float) -> float:
@@ -330,6 +321,12 @@ class SE3ToppPlanner(Planner):
         name: str,
         lead_limit: float | None,
     ):
+        require(  # the schema's ranges
+            SE3ToppConfig, "trajectory", standoff=standoff, v_max_approach=v_max_approach,
+            a_max_approach=a_max_approach, omega_max_approach=omega_max_approach,
+            alpha_max_approach=alpha_max_approach, v_max_docking=v_max_docking, a_max_docking=a_max_docking,
+            omega_max_docking=omega_max_docking, alpha_max_docking=alpha_max_docking, lead_limit=lead_limit,
+        )  # fmt: skip
         self.limits = {
             "approach": Limits(
                 float(v_max_approach),
@@ -341,10 +338,8 @@ class SE3ToppPlanner(Planner):
                 float(v_max_docking), float(a_max_docking), float(omega_max_docking), float(alpha_max_docking)
             ),
         }
-        for seg, lim in self.limits.items():
-            lim.check(seg)
         pieces, self.notes = docking_waypoints(waypoints, float(standoff), "se3topp")
-        self.lead_limit = checked_lead_limit(lead_limit)
+        self.lead_limit = None if lead_limit is None else float(lead_limit)
         for note in self.notes:
             log.info(note)
         self._screws: list[_Screw] = []

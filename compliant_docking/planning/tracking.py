@@ -27,6 +27,8 @@ import math
 
 import numpy as np
 
+from compliant_docking.config.ranges import require
+from compliant_docking.config.schemas import TrackingConfig
 from compliant_docking.planning.base import (
     Planner,
     ReferenceTable,
@@ -75,22 +77,13 @@ class TrackingPlanner(Planner):
                 "docking interface: it needs target=none (a target is configured). "
                 "Use `+experiment=tracking_gate`, or add target=none."
             )
-        for label, value in (
-            ("transition_duration", transition_duration),
-            ("circle_duration", circle_duration),
-            ("figure8_duration", figure8_duration),
-        ):
-            if not value > 0.0:
-                raise ValueError(f"trajectory.{label} must be > 0 s, got {value}")
-        for label, value in (
-            ("circle_radius", circle_radius),
-            ("circle_frequency", circle_frequency),
-            ("figure8_radius_x", figure8_radius_x),
-            ("figure8_radius_y", figure8_radius_y),
-            ("figure8_frequency", figure8_frequency),
-        ):
-            if not (value >= 0.0 and math.isfinite(value)):
-                raise ValueError(f"trajectory.{label} must be ≥ 0, got {value}")
+        require(  # the schema's ranges
+            TrackingConfig, "trajectory", transition_duration=transition_duration,
+            circle_duration=circle_duration, circle_radius=circle_radius, circle_frequency=circle_frequency,
+            circle_center_offset=circle_center_offset, figure8_duration=figure8_duration,
+            figure8_radius_x=figure8_radius_x, figure8_radius_y=figure8_radius_y,
+            figure8_frequency=figure8_frequency,
+        )  # fmt: skip
         self._p0 = np.asarray(waypoints.start.translation, dtype=float).copy()
         self._rot = np.asarray(waypoints.start.rotation, dtype=float).copy()
         self._centre = self._p0 + float(circle_center_offset) * _Z

@@ -25,13 +25,14 @@ import math
 import numpy as np
 import pinocchio as pin
 
+from compliant_docking.config.ranges import require
+from compliant_docking.config.schemas import TwoPhaseConfig
 from compliant_docking.planning.base import (
     Planner,
     ReferenceTable,
     Waypoints,
     quintic_scaling,
 )
-from compliant_docking.planning.lead import checked_lead_limit
 
 log = logging.getLogger(__name__)
 
@@ -65,8 +66,6 @@ def docking_waypoints(
             f"trajectory={planner} needs a goal (a target); with target=none "
             "use trajectory=tracking or trajectory=hold"
         )
-    if not standoff >= 0.0:
-        raise ValueError(f"trajectory.standoff must be ≥ 0 m, got {standoff}")
     axis = np.asarray(waypoints.axis, dtype=float)
     axis = axis / np.linalg.norm(axis)
     start, goal = waypoints.start, waypoints.goal
@@ -116,15 +115,17 @@ class TwoPhasePlanner(Planner):
         name: str,
         lead_limit: float | None,
     ):
+        require(  # the schema's ranges
+            TwoPhaseConfig, "trajectory", standoff=standoff, v_max_approach=v_max_approach,
+            a_max_approach=a_max_approach, v_max_docking=v_max_docking, a_max_docking=a_max_docking,
+            lead_limit=lead_limit,
+        )  # fmt: skip
         limits = {
             "approach": (float(v_max_approach), float(a_max_approach)),
             "docking": (float(v_max_docking), float(a_max_docking)),
         }
-        for seg, (v, a) in limits.items():
-            if not (v > 0.0 and a > 0.0):
-                raise ValueError(f"trajectory.v_max_{seg} and a_max_{seg} must be > 0, got {v}, {a}")
         pieces, self.notes = docking_waypoints(waypoints, float(standoff), "twophase")
-        self.lead_limit = checked_lead_limit(lead_limit)
+        self.lead_limit = None if lead_limit is None else float(lead_limit)
         for note in self.notes:
             log.info(note)
         self._segments: list[tuple[str, float, float]] = []

@@ -37,11 +37,11 @@ def problems(cfg: DictConfig) -> list[str]:
     """The problems of ``cfg`` (a composed config that passed the config layer's check),
     one sentence each; [] when the run can start."""
     from compliant_docking.config.memory import memory_problem
-    from compliant_docking.sim.simulate import joint_problems
+    from compliant_docking.config.validate import per_joint_problems
 
     found = _robot_problems(cfg)
     if not found:
-        found = joint_problems(cfg, _robot(str(cfg.robot.mjcf))[0])
+        found = per_joint_problems(cfg, _robot(str(cfg.robot.mjcf))[0])
     for kind in ("tool", "target") if cfg.target.get("name") != "none" else ("tool",):
         mjcf = cfg[kind].get("mjcf")
         problem = _fragment(kind, str(mjcf)) if mjcf else None

@@ -42,8 +42,6 @@ RECORD_KEYS = (
     "misalignment_tilt_deg",
     "misalignment_seed",
 )
-#: tilts at or beyond this are refused (the socket would face sideways) [deg]
-MAX_TILT_DEG = 60.0
 
 
 @dataclass(frozen=True)
@@ -108,56 +106,46 @@ def empty_record() -> dict:
     return dict.fromkeys(RECORD_KEYS)
 
 
-def _range(settings, name: str) -> tuple[float, float] | None:
-    value = settings.get(f"{name}_range")
-    if value is None:
-        return None
-    bounds = [float(v) for v in value]
-    key = f"task.misalignment.{name}_range"
-    if len(bounds) != 2 or not all(math.isfinite(b) for b in bounds):
-        raise ValueError(f"{key} must be [low, high] with finite numbers, got {list(value)}")
-    if bounds[0] > bounds[1]:
-        raise ValueError(f"{key} must be [low, high] with low <= high, got {bounds}")
-    return bounds[0], bounds[1]
-
-
 def draw(settings) -> Misalignment:
     """The misalignment of ``settings`` (``task.misalignment``: a DictConfig or a dict).
 
     Fixed components pass through; a component with a ``<name>_range`` is drawn
     uniformly from it with the stream ``SeedSequence([seed, index of the component])``.
-    Raises ValueError naming the setting for contradictory or meaningless values.
+    Raises ValueError naming the setting for contradictory or meaningless values: the
+    config check's ranges (``MisalignmentConfig``) and relations, in its words.
     """
     if settings is None:
         return Misalignment()
+    from compliant_docking.config.ranges import require
+    from compliant_docking.config.schemas import MisalignmentConfig
+    from compliant_docking.config.validate import misalignment_problems
+
+    keys = (*COMPONENTS, *(f"{name}_range" for name in COMPONENTS), "seed")
+    given = {k: _plain(settings.get(k)) for k in keys if settings.get(k) is not None}
+    require(MisalignmentConfig, "task.misalignment", **given)
+    found = misalignment_problems(settings, has_target=True)
+    if found:
+        raise ValueError(" ".join(found))
     seed = settings.get("seed", 0)
     values: dict[str, float] = {}
     drawn = False
     for index, name in enumerate(COMPONENTS):
-        fixed = float(settings.get(name, 0.0) or 0.0)
-        if not math.isfinite(fixed):
-            raise ValueError(f"task.misalignment.{name} must be finite, got {fixed}")
-        bounds = _range(settings, name)
+        bounds = given.get(f"{name}_range")
         if bounds is None:
-            values[name] = fixed
+            values[name] = float(given.get(name, 0.0))
             continue
-        if fixed != 0.0:
+        if seed is None:  # a draw needs its seed
             raise ValueError(
-                f"task.misalignment.{name} = {fixed:g} and "
-                f"task.misalignment.{name}_range are both set: set one of them "
-                f"(the range draws the value)"
+                f"task.misalignment.seed must be an integer >= 0 to draw task.misalignment.{name}; got None."
             )
-        if seed is None or int(seed) < 0:
-            raise ValueError(
-                f"task.misalignment.seed must be an integer >= 0 to draw task.misalignment.{name}, got {seed}"
-            )
-        values[name] = uniform_draw(int(seed), index, *bounds)
+        values[name] = uniform_draw(int(seed), index, float(bounds[0]), float(bounds[1]))
         drawn = True
-    if abs(values["tilt_deg"]) >= MAX_TILT_DEG:
-        raise ValueError(
-            f"task.misalignment.tilt_deg must be within ±{MAX_TILT_DEG:g} deg, got {values['tilt_deg']:.4g}"
-        )
     return Misalignment(**values, seed=int(seed) if drawn else None)
+
+
+def _plain(value):
+    """A setting as a Python number or list (a DictConfig's list node is not a list)."""
+    return list(value) if hasattr(value, "__len__") and not isinstance(value, str) else value
 
 
 def record_for(cfg) -> dict:

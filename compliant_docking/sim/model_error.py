@@ -132,7 +132,7 @@ def believed_arm(cfg, scene, error: ModelError):
     return ArmModel(
         resolve_path(cfg.robot.mjcf),
         cfg.robot.ee_site,
-        mount_placement(cfg.tool.mount_pos, cfg.tool.mount_quat),
+        mount_placement(cfg.tool.mount_pos, cfg.tool.mount_quat, "tool.mount_quat"),
         error.believed_tool(scene.arm.tool),
         scene.gravity,
         adjust=error.adjust_links,

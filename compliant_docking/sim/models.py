@@ -19,6 +19,8 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
+from compliant_docking.config.validate import quaternion_problem
+
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 # bound once: the per-step update looks them up as globals, not as module attributes
 _all_terms, _minverse = pin.computeAllTerms, pin.computeMinverse
@@ -159,10 +161,11 @@ class ArmModel:
         return q
 
 
-def mount_placement(pos, quat_wxyz) -> pin.SE3:
-    """SE3 from a position and a wxyz quaternion (as written in the configs)."""
+def mount_placement(pos, quat_wxyz, key: str) -> pin.SE3:
+    """SE3 from a position and a wxyz quaternion (as written in the configs, at ``key``)."""
+    problem = quaternion_problem(key, [float(c) for c in quat_wxyz])  # the config check's rule
+    if problem:
+        raise ValueError(problem)
     w, x, y, z = (float(c) for c in quat_wxyz)
     quat = pin.Quaternion(w, x, y, z)
-    if abs(quat.norm() - 1.0) > 1e-6:
-        raise ValueError(f"quaternion {list(quat_wxyz)} is not unit length (wxyz expected)")
     return pin.SE3(quat.normalized().matrix(), np.asarray(pos, dtype=float))

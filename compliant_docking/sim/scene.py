@@ -33,6 +33,7 @@ from omegaconf import DictConfig, OmegaConf
 from compliant_docking import looked_in, resolve_path
 from compliant_docking.config.geometry import PlugGeometry, SocketGeometry, check_fit
 from compliant_docking.config.keyed import KeyedPlugGeometry, KeyedSocketGeometry, check_keyed_fit
+from compliant_docking.config.validate import misalignment_problems
 from compliant_docking.sim.dynamics import draw as contact_draw
 from compliant_docking.sim.geometry import build_plug, build_socket
 from compliant_docking.sim.geometry.fragment import Key, read_key
@@ -193,12 +194,14 @@ def socket_pose(cfg: DictConfig) -> SocketPose | None:
     believed = ``target.pos``/``target.quat``; true = believed · the misalignment of
     ``task.misalignment`` (fixed or drawn with its seed; compliant_docking/sim/misalignment.py).
     """
-    offset = draw(cfg.task.get("misalignment"))
+    settings = cfg.task.get("misalignment")
+    offset = draw(settings)
     if cfg.target.name == "none":
-        if not offset.is_zero:
-            raise ValueError("task.misalignment needs a socket (target=none has none)")
+        needs_socket = misalignment_problems(settings, has_target=False)  # the config check's rule
+        if needs_socket:
+            raise ValueError(" ".join(needs_socket))
         return None
-    nominal = mount_placement(cfg.target.pos, cfg.target.quat)
+    nominal = mount_placement(cfg.target.pos, cfg.target.quat, "target.quat")
     return SocketPose(true=offset.apply(nominal), believed=nominal, misalignment=offset)
 
 
@@ -284,7 +287,7 @@ def build_scene(cfg: DictConfig) -> Scene:
     tool_spec, source, key = _load_fragment("tool", cfg.tool, contact)
     tool = rigid_tool(tool_spec, source)
     tool_spec, _, _ = _load_fragment("tool", cfg.tool, contact)
-    mount = mount_placement(cfg.tool.mount_pos, cfg.tool.mount_quat)
+    mount = mount_placement(cfg.tool.mount_pos, cfg.tool.mount_quat, "tool.mount_quat")
     tool_root = tool_spec.body("dock")
     tool_root.pos = mount.translation.tolist()
     tool_root.quat = pin.Quaternion(mount.rotation).coeffs()[[3, 0, 1, 2]].tolist()

@@ -23,6 +23,9 @@ from hydra.utils import instantiate
 from omegaconf import DictConfig
 
 from compliant_docking.config.memory import memory_problem
+from compliant_docking.config.ranges import require
+from compliant_docking.config.schemas import RobotConfig, TaskConfig
+from compliant_docking.config.validate import per_joint_problems, press_problem
 from compliant_docking.planning.base import (
     Planner,
     PressHome,
@@ -252,20 +255,6 @@ def _divergence_reason(t: float, qvel: np.ndarray, tau: np.ndarray, bad_qacc: in
     return f"simulation diverged at t = {t:.3f} s: {what}"
 
 
-#: the robot's lists with one value per joint
-PER_JOINT_KEYS = ("velocity_limits", "torque_limits", "max_torque", "ik_guess")
-
-
-def joint_problems(cfg: DictConfig, nv: int) -> list[str]:
-    """The robot's per-joint lists whose length is not the robot's ``nv`` joints."""
-    return [
-        f"robot.{key} has {len(cfg.robot[key])} values; robot {cfg.robot.name} has {nv} joints: "
-        "give one value per joint."
-        for key in PER_JOINT_KEYS
-        if len(cfg.robot[key]) != nv
-    ]
-
-
 def plan(cfg: DictConfig, waypoints: Waypoints) -> Planner:
     """The planner of ``cfg`` (the `trajectory` config group) for ``waypoints``, followed by
     the press home when the task presses (:class:`PressHome`); raises ValueError for a
@@ -275,12 +264,10 @@ def plan(cfg: DictConfig, waypoints: Waypoints) -> Planner:
     planner = instantiate(cfg.trajectory, _partial_=True, _convert_="all")(waypoints=waypoints)
     overshoot = float(cfg.task.insertion_overshoot)
     if waypoints.goal is not None and overshoot != 0.0:
-        if not 0.0 < cfg.task.press_duration <= cfg.task.settle_time:
-            raise ValueError(
-                f"task.press_duration ({cfg.task.press_duration:g} s) must be > 0 and "
-                f"at most task.settle_time ({cfg.task.settle_time:g} s): the press "
-                f"happens after the planned motion, while the run settles"
-            )
+        require(TaskConfig, "task", press_duration=cfg.task.press_duration)  # the config check's rules
+        too_long = press_problem(cfg, has_target=True)
+        if too_long:
+            raise ValueError(too_long)
         planner = PressHome(planner, overshoot * waypoints.axis, cfg.task.press_duration)
     return planner
 
@@ -290,11 +277,10 @@ def prepare(cfg: DictConfig) -> Simulation:
     scene = build_scene(cfg)
     model, arm = scene.model, scene.arm
     nv = model.nv
-    wrong = joint_problems(cfg, nv)
+    wrong = per_joint_problems(cfg, nv)  # the config check's rules, for a run built from Python
     if wrong:
         raise ValueError(wrong[0])
-    if np.any(np.asarray(cfg.robot.max_torque, float) <= 0.0):
-        raise ValueError(f"robot.max_torque must be > 0 for every joint, got {list(cfg.robot.max_torque)}")
+    require(RobotConfig, "robot", max_torque=list(cfg.robot.max_torque))  # the motors' clip below
 
     waypoints = task_waypoints(cfg, scene)
     planner = plan(cfg, waypoints)

@@ -6,6 +6,9 @@ import numpy as np
 import pinocchio as pin
 from omegaconf import DictConfig
 
+from compliant_docking.config.ranges import require
+from compliant_docking.config.schemas import TaskConfig
+from compliant_docking.config.validate import quaternion_problem, start_problems
 from compliant_docking.planning.base import Planner, Waypoints
 from compliant_docking.sim.geometry.fragment import MATED
 from compliant_docking.sim.scene import Scene
@@ -24,12 +27,10 @@ def task_waypoints(cfg: DictConfig, scene: Scene) -> Waypoints:
     stroke = np.asarray(task.stroke, dtype=float)
     length = float(np.linalg.norm(stroke))
     guess = scene.arm.tcp_placement(np.asarray(cfg.robot.ik_guess, dtype=float)).rotation
+    unplaced = start_problems(cfg, has_target=scene.socket is not None)  # the config check's rule
+    if unplaced:
+        raise ValueError(unplaced[0])
     if scene.socket is None:
-        if task.init_pos is None:
-            raise ValueError(
-                "task.init_pos must be set when there is no target (target=none): "
-                "the start pose cannot be derived from a socket"
-            )
         rot = (
             _quat_matrix(task.init_quat, "task.init_quat")
             if task.init_quat is not None
@@ -38,8 +39,6 @@ def task_waypoints(cfg: DictConfig, scene: Scene) -> Waypoints:
         axis = stroke / length if length > 0 else rot[:, 2]
         return Waypoints(start=pin.SE3(rot, np.asarray(task.init_pos, float)), goal=None, axis=axis)
 
-    if not length > 0.0:
-        raise ValueError(f"task.stroke must be a non-zero vector, got {stroke.tolist()}")
     axis = stroke / length
     seat = scene.socket.believed
     if task.init_pos is None:
@@ -96,8 +95,9 @@ def _with_axis(rot: np.ndarray, z_axis: np.ndarray) -> np.ndarray:
 
 def _quat_matrix(quat, setting: str) -> np.ndarray:
     q = np.asarray(quat, dtype=float)
-    if q.shape != (4,) or not np.isfinite(q).all() or abs(np.linalg.norm(q) - 1.0) > 1e-6:
-        raise ValueError(f"{setting} must be a unit quaternion [w, x, y, z], got {list(quat)}")
+    problem = quaternion_problem(setting, q.ravel().tolist())  # the config check's rule
+    if problem:
+        raise ValueError(problem)
     return pin.Quaternion(q[0], q[1], q[2], q[3]).matrix()
 
 
@@ -106,9 +106,8 @@ def run_duration(cfg: DictConfig, planner: Planner) -> tuple[float, list[str]]:
     notes: list[str] = []
     if cfg.task.duration is None:
         return planner.duration + float(cfg.task.settle_time), notes
+    require(TaskConfig, "task", duration=cfg.task.duration)  # the config check's rule
     duration = float(cfg.task.duration)
-    if not duration > 0.0:
-        raise ValueError(f"task.duration must be > 0 s (or null to follow the trajectory), got {duration}")
     if duration < planner.duration:
         notes.append(
             f"task.duration = {duration:g} s is shorter than the trajectory "
@@ -124,6 +123,5 @@ def hold_extension(cfg: DictConfig, planner: Planner) -> float:
     if planner.lead_limit is None or cfg.task.duration is not None:
         return 0.0
     max_hold = float(cfg.task.get("max_hold", 0.0))
-    if not max_hold >= 0.0:
-        raise ValueError(f"task.max_hold must be >= 0 s, got {max_hold}")
+    require(TaskConfig, "task", max_hold=max_hold)  # the config check's rule
     return max_hold

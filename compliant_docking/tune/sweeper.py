@@ -42,7 +42,7 @@ from compliant_docking.tune import study as studies
 MAX_CORNERS = 32
 #: config groups whose overrides do not change what a trial computes (a study resumed
 #: with or without them is the same study)
-NOT_DEFINING = ("tracking",)
+NOT_DEFINING = ("logger", "tracking")
 
 
 def job_name(trial_number: int, draw: int) -> str:
@@ -156,7 +156,7 @@ class TuningSweeper(Sweeper):
             "require_docking": bool(self.objective_cfg.require_docking),
             "penalty": float(self.objective_cfg.penalty),
             "draws": draws,
-            # the order on the command line does not matter, nor does tracking (+tracking=mlflow)
+            # the order on the command line does not matter, nor does the logger (+logger=mlflow)
             "fixed": sorted(f for f in fixed if f.lstrip("+").split("=", 1)[0] not in NOT_DEFINING),
         }
         return {

@@ -36,11 +36,6 @@ def test_task_inertia_falls_back_at_a_singularity():
     assert eig.max() / eig.min() <= 1.0001e6
 
 
-def test_task_inertia_rejects_a_meaningless_threshold():
-    with pytest.raises(ValueError, match="condition_threshold"):
-        TaskInertia(0.5)
-
-
 def test_friction_feedforward_modes():
     f = np.array([1.0, 0.0, 0.5])
     b = np.array([0.2, 0.0, 0.1])

@@ -419,11 +419,11 @@ def test_config_composes_with_the_seed_defaults():
 @pytest.mark.parametrize(
     "override, message",
     [
-        ("controller.A_diag=[10,10,10,1,1,0]", "positive definite"),
-        ("controller.K_diag=[50,50,-1,25,25,25]", "positive semi-definite"),
-        ("controller.D_diag=[80,80,80]", "6 finite values"),
-        ("controller.null_damping=-1", "null_damping"),
-        ("controller.condition_threshold=0.5", "condition_threshold"),
+        ("controller.A_diag=[10,10,10,1,1,0]", r"controller.A_diag\[5\] must be a finite number > 0"),
+        ("controller.K_diag=[50,50,-1,25,25,25]", r"controller.K_diag\[2\] must be a finite number >= 0"),
+        ("controller.D_diag=[80,80,80]", "controller.D_diag must have 6 values; got 3"),
+        ("controller.null_damping=-1", "controller.null_damping must be a finite number >= 0"),
+        ("controller.condition_threshold=0.5", "controller.condition_threshold must be a finite number > 1"),
     ],
 )
 def test_bad_gains_are_refused_with_a_message(override, message):

@@ -160,10 +160,15 @@ def test_a_fixed_component_passes_through_and_cannot_be_drawn_as_well():
 
 @pytest.mark.parametrize("tilt", [60.0, -60.0, 75.0, -75.0])
 def test_a_tilt_of_60_degrees_or_more_either_way_is_refused(tilt):
-    """|tilt| < 60° (the socket would face sideways): fixed or drawn, ±60° itself refused."""
-    with pytest.raises(ValueError, match=r"task\.misalignment\.tilt_deg must be within ±60 deg"):
+    """|tilt| < 60° (the socket would face sideways): fixed or drawn, ±60° itself refused
+    (the schema's range, in the config check's words)."""
+    with pytest.raises(
+        ValueError, match=r"^task\.misalignment\.tilt_deg must be a finite number in \(-60, 60\) deg"
+    ):
         draw({"tilt_deg": tilt})
-    with pytest.raises(ValueError, match=r"task\.misalignment\.tilt_deg must be within ±60 deg"):
+    with pytest.raises(
+        ValueError, match=r"^task\.misalignment\.tilt_deg_range\[0\] must be a finite number in \(-60, 60\)"
+    ):
         draw({"tilt_deg_range": [tilt, tilt], "seed": 0})
     assert draw({"tilt_deg": np.copysign(59.99, tilt)}).tilt_deg == np.copysign(59.99, tilt)
 
@@ -171,16 +176,16 @@ def test_a_tilt_of_60_degrees_or_more_either_way_is_refused(tilt):
 @pytest.mark.parametrize(
     "settings, key",
     [
-        ({"x": float("nan")}, "task.misalignment.x must be finite"),
-        ({"y": float("inf")}, "task.misalignment.y must be finite"),
-        ({"x_range": [0.0, float("inf")], "seed": 0}, "task.misalignment.x_range must be [low, high]"),
-        ({"yaw_deg_range": [1.0], "seed": 0}, "task.misalignment.yaw_deg_range must be [low, high]"),
+        ({"x": float("nan")}, "task.misalignment.x must be a finite number in [-1, 1] m; got nan."),
+        ({"y": float("inf")}, "task.misalignment.y must be a finite number in [-1, 1] m; got inf."),
+        ({"x_range": [0.0, float("inf")], "seed": 0}, "task.misalignment.x_range[1] must be a finite number"),
+        ({"yaw_deg_range": [1.0], "seed": 0}, "task.misalignment.yaw_deg_range must have 2 values; got 1"),
         (
             {"yaw_deg_range": [0.0, 1.0, 2.0], "seed": 0},
-            "task.misalignment.yaw_deg_range must be [low, high]",
+            "task.misalignment.yaw_deg_range must have 2 values; got 3",
         ),
-        ({"x_range": [0.0, 0.001], "seed": -1}, "task.misalignment.seed must be an integer >= 0"),
-        ({"x_range": [0.0, 0.001], "seed": None}, "task.misalignment.seed must be an integer >= 0"),
+        ({"x_range": [0.0, 0.001], "seed": -1}, "task.misalignment.seed must be an integer in [0, "),
+        ({"x_range": [0.0, 0.001], "seed": None}, "task.misalignment.seed must be an integer >= 0 to draw"),
     ],
 )
 def test_meaningless_draw_settings_are_refused_naming_the_setting(settings, key):

@@ -82,13 +82,11 @@ class PreloadRamp:
     of contact. In contact from the step the contact magnitude exceeds PRELOAD_CONTACT_N
     (1 N) until it falls below PRELOAD_RELEASE_N (0.5 N): without this hysteresis a press
     settling under 1 N (0.63 N in the default docking scene) would never hold a preload.
+    ``target`` ≥ 0 and ``ramp_s`` > 0: the ranges of ``controller.preload_force`` and
+    ``controller.preload_ramp_s``, which the controller checks (``config.ranges.require``).
     """
 
     def __init__(self, target: float, ramp_s: float, dt: float):
-        if target < 0.0:
-            raise ValueError(f"controller.preload_force must be ≥ 0, got {target}")
-        if not ramp_s > 0.0:
-            raise ValueError(f"controller.preload_ramp_s must be > 0, got {ramp_s}")
         self.target = float(target)
         self.step = self.target / float(ramp_s) * float(dt)
         # [value, in contact (0/1), step, target]: the state compiled code updates in place

@@ -45,6 +45,9 @@ import pinocchio as pin
 
 import compliant_docking.control.hqp.kernel as K
 from compliant_docking.config import ForceSource, NullSpaceMetric
+from compliant_docking.config.ranges import require
+from compliant_docking.config.schemas import HQPConfig, RobotConfig
+from compliant_docking.config.validate import torque_margin_problem
 from compliant_docking.control.base import Controller, vector_setting
 from compliant_docking.control.hqp.compliance import PreloadRamp, modal_damping
 from compliant_docking.control.hqp.manipulability import check_revolute_chain
@@ -102,17 +105,16 @@ class HQPController(Controller):
         n = arm.nv
         self.n = n
         check_revolute_chain(arm.model)
-        self.K0 = vector_setting(K0, 6, "K0", minimum=0.0)
-        if not 0.0 < K_min_ratio <= 1.0:
-            raise ValueError(f"controller.K_min_ratio must be in (0, 1], got {K_min_ratio}")
-        if k_alpha < 0.0 or contact_deadband < 0.0:
-            raise ValueError("controller.k_alpha and controller.contact_deadband must be ≥ 0")
-        if not dt_p > 0.0:
-            raise ValueError(f"controller.dt_p must be > 0 s, got {dt_p}")
-        if not condition_threshold > 1.0:
-            raise ValueError(f"controller.condition_threshold must be > 1, got {condition_threshold}")
-        if omega_th < 0.0 or k_sa < 0.0 or k_ji < 0.0:
-            raise ValueError("controller.omega_th, k_sa and k_ji must be ≥ 0")
+        require(  # the schema's ranges: the config check's refusals, word for word
+            HQPConfig, "controller", K0=K0, K_min_ratio=K_min_ratio, k_alpha=k_alpha, omega_th=omega_th,
+            k_sa=k_sa, K_ji=K_ji, D_ji=D_ji, k_ji=k_ji, dt_p=dt_p, eps_abs=eps_abs, observer_kp=observer_kp,
+            observer_ki=observer_ki, preload_force=preload_force, preload_ramp_s=preload_ramp_s,
+            contact_deadband=contact_deadband, condition_threshold=condition_threshold,
+        )  # fmt: skip
+        require(
+            RobotConfig, "robot", velocity_limits=context.velocity_limits, max_torque=context.torque_limits
+        )
+        self.K0 = vector_setting(K0, 6, "controller.K0")
         self.min_stiffness_ratio, self.sigmoid_gain = float(K_min_ratio), float(k_alpha)
         self.deadband = float(contact_deadband)
         self.sqrt_K0 = np.sqrt(self.K0)
@@ -122,8 +124,8 @@ class HQPController(Controller):
         self._ws = np.zeros(ws_size)
         self.threshold = float(condition_threshold)
         self.manipulability_threshold, self.singularity_weight = float(omega_th), float(k_sa)
-        self.posture_stiffness = float(k_ji) * vector_setting(K_ji, n, "K_ji", minimum=0.0)
-        self.posture_damping = float(k_ji) * vector_setting(D_ji, n, "D_ji", minimum=0.0)
+        self.posture_stiffness = float(k_ji) * vector_setting(K_ji, n, "controller.K_ji")
+        self.posture_damping = float(k_ji) * vector_setting(D_ji, n, "controller.D_ji")
         self.q_home = np.asarray(context.q_home, dtype=float).copy()
         # q̈_ji = K_ji(q_home − q) − D_ji v as one product [q, v, 1]·T_ji
         kp, kd = self.posture_stiffness, self.posture_damping
@@ -240,15 +242,16 @@ class HQPController(Controller):
         n, arm = self.n, self.arm
         self.dt_p = dt_p
         self.eps_abs = float(eps_abs)
-        v_max = vector_setting(context.velocity_limits, n, "robot.velocity_limits", minimum=0.0)
-        tau_max = vector_setting(context.torque_limits, n, "robot.max_torque", minimum=0.0)
+        v_max = vector_setting(context.velocity_limits, n, "robot.velocity_limits")
+        tau_max = vector_setting(context.torque_limits, n, "robot.max_torque")
         q_min = np.clip(np.asarray(arm.q_lower, dtype=float), -BIG, BIG)
         q_max = np.clip(np.asarray(arm.q_upper, dtype=float), -BIG, BIG)
         self.v_max, self.tau_max, self.q_min, self.q_max = v_max, tau_max, q_min, q_max
         # the torque rows keep 2·eps_abs inside the clip: the solver's tolerance (and level 2's
         # eps_abs margin) then never lets the command reach the clip the motors apply
-        if np.any(tau_max <= 4.0 * self.eps_abs):
-            raise ValueError(f"robot.max_torque must exceed 4·controller.eps_abs, got {tau_max.tolist()}")
+        margin = torque_margin_problem(tau_max.tolist(), self.eps_abs)
+        if margin:
+            raise ValueError(margin)
         half = np.concatenate([v_max, 0.5 * (q_max - q_min), tau_max - 2.0 * self.eps_abs])
         self._tau_bound = tau_max - 2.0 * self.eps_abs
         self._half = half

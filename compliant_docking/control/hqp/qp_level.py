@@ -23,6 +23,7 @@ class QPLevel:
 
     Solves are warm-started at a given x with the previous multipliers. Counts failures
     (any status but solved, or a non-finite result) and times every update + solve.
+    ``eps_abs`` > 0: the range of ``controller.eps_abs``, which the controller checks.
     """
 
     def __init__(
@@ -34,8 +35,6 @@ class QPLevel:
         mu_in: float | None = None,
         eps_primal_inf: float | None = None,
     ):
-        if not eps_abs > 0.0:
-            raise ValueError(f"controller.eps_abs must be > 0, got {eps_abs}")
         self.name = name
         qp = proxqp.dense.QP(n, 0, n_in)
         qp.settings.eps_abs = float(eps_abs)

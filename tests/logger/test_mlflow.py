@@ -1,6 +1,6 @@
-"""+tracking=mlflow: a sweep logged into a temporary store holds one parent run and one
-child run per job with the job's config, metrics and files; a single run; and tracking
-that cannot log never fails the job."""
+"""+logger=mlflow: a sweep logged into a temporary store holds one parent run and one
+child run per job with the job's config, metrics and files; a single run; a logger that
+cannot log never fails the job; the old spelling +tracking=mlflow still works and says so."""
 
 from __future__ import annotations
 
@@ -11,8 +11,8 @@ import pytest
 import yaml
 from omegaconf import OmegaConf
 
+from compliant_docking.logger.mlflow_callback import MlflowCallback, param_text
 from compliant_docking.run.rundir import flatten
-from compliant_docking.tracking.mlflow_callback import MlflowCallback, param_text
 from tests.helpers import SHORT_SWEEP as SHORT
 from tests.helpers import SWEEP_LAUNCHERS, sweep_with
 
@@ -42,7 +42,7 @@ def test_a_sweep_is_a_parent_run_with_one_child_run_per_job(tmp_path, store, cap
         sweep,
         *SHORT,
         "robot=iiwa14,fr3",
-        "+tracking=mlflow",
+        "+logger=mlflow",
         "figures=true",  # sweep jobs draw none by default: here they do, to log them
         "hydra.callbacks.sweep.figures=false",
         env={"MLFLOW_TRACKING_URI": store},
@@ -50,7 +50,7 @@ def test_a_sweep_is_a_parent_run_with_one_child_run_per_job(tmp_path, store, cap
     assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-3000:]
     assert "mlflow: could not" not in result.stdout
     jobs = sorted(p for p in sweep.iterdir() if (p / "metrics.json").is_file())
-    assert len(jobs) == 2 and all("tracking" not in p.name for p in jobs)  # not in the job names
+    assert len(jobs) == 2 and all("logger" not in p.name for p in jobs)  # not in the job names
 
     client, runs = runs_of(store)
     parents = [r for r in runs if "mlflow.parentRunId" not in r.data.tags]
@@ -117,7 +117,7 @@ def test_a_single_run_is_a_run_of_its_own(tmp_path, store, capsys):
     assert run.data.tags["robot"] == "fr3" and run.info.status == "FINISHED"
 
 
-def test_tracking_that_cannot_log_says_so_and_never_fails_the_job(tmp_path, monkeypatch, capsys):
+def test_a_logger_that_cannot_log_says_so_and_never_fails_the_job(tmp_path, monkeypatch, capsys):
     job, config, _ = job_dir(tmp_path)
     monkeypatch.setitem(sys.modules, "mlflow.tracking", None)  # as if MLflow were not installed
     callback = MlflowCallback(
@@ -127,7 +127,7 @@ def test_tracking_that_cannot_log_says_so_and_never_fails_the_job(tmp_path, monk
     callback.on_job_end(config, job_return=None)  # does not raise
     out = capsys.readouterr().out
     assert "mlflow: could not log 14-03-12_fr3_impedance_quintic" in out
-    assert "pip install -e '.[tracking]'" in out
+    assert "pip install -e '.[logger]'" in out
 
 
 # --------------------------------------------------------------------------- unreachable servers
@@ -175,11 +175,11 @@ def _refusing_uri() -> str:
 
 
 @pytest.mark.parametrize("kind", ["refused", "silent"])
-def test_an_unreachable_server_turns_tracking_off_with_one_line(tmp_path, monkeypatch, capsys, kind):
+def test_an_unreachable_server_turns_logging_off_with_one_line(tmp_path, monkeypatch, capsys, kind):
     """A port that refuses, or a server that never answers: one line when the command starts,
     nothing logged, nothing waited for later (MLflow's own retries took ~4 minutes per call),
     the job's files as they were."""
-    from compliant_docking.tracking import mlflow_callback
+    from compliant_docking.logger import mlflow_callback
 
     monkeypatch.setattr(mlflow_callback, "PROBE_TIMEOUT_S", 0.5, raising=False)
     server = _Server() if kind == "silent" else None
@@ -199,7 +199,7 @@ def test_an_unreachable_server_turns_tracking_off_with_one_line(tmp_path, monkey
         out = capsys.readouterr().out.splitlines()
         assert len(out) == 2  # one line per command (the single run's, the sweep's), none per job
         for line in out:
-            assert line.startswith(f"mlflow: tracking off: {uri} did not answer within 0.5 s (")
+            assert line.startswith(f"mlflow: logging off: {uri} did not answer within 0.5 s (")
             assert line.endswith("the results are in the run directories as always")
         assert {p.name: p.read_bytes() for p in job.iterdir() if p.is_file()} == before
         if server:
@@ -228,3 +228,34 @@ def test_a_server_that_stops_answering_costs_one_attempt_per_process(tmp_path, m
         assert sum(" /health " not in r for r in server.requests) == 1
     finally:
         server.close()
+
+
+def _callbacks(*overrides: str) -> dict:
+    from hydra import compose, initialize_config_dir
+    from hydra.core.global_hydra import GlobalHydra
+
+    from compliant_docking import CONF_DIR
+    from compliant_docking.config import register_schemas
+
+    register_schemas()
+    GlobalHydra.instance().clear()
+    with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
+        cfg = compose("config", overrides=list(overrides), return_hydra_config=True)
+    return OmegaConf.to_container(cfg.hydra.callbacks)
+
+
+def test_the_old_spelling_composes_the_same_logger_and_says_it_is_deprecated(capsys):
+    """``+tracking=mlflow`` (scripts may have it) is ``+logger=mlflow`` plus one line saying
+    so when the command starts."""
+    from hydra.utils import instantiate
+
+    new, old = _callbacks("+logger=mlflow"), _callbacks("+tracking=mlflow")
+    assert new["mlflow"]["_target_"] == "compliant_docking.logger.mlflow_callback.MlflowCallback"
+    assert old["mlflow"] == new["mlflow"]
+    assert set(old) - set(new) == {"renamed_tracking"} and "renamed_tracking" not in new
+    renamed = instantiate(old["renamed_tracking"])
+    for start in (renamed.on_run_start, renamed.on_multirun_start):
+        start(OmegaConf.create({}))
+        err = capsys.readouterr().err
+        assert err.startswith("compliant-docking: +tracking=mlflow is deprecated: use +logger=mlflow ")
+        assert err.count("\n") == 1

@@ -1,4 +1,4 @@
-"""``+tracking=mlflow``: every job logged to MLflow (conf/tracking/mlflow.yaml, docs/tracking.md).
+"""``+logger=mlflow``: every job logged to MLflow (conf/logger/mlflow.yaml, docs/logger.md).
 
 A Hydra callback, :class:`MlflowCallback`, beside the sweep callback:
 
@@ -18,9 +18,9 @@ A Hydra callback, :class:`MlflowCallback`, beside the sweep callback:
 Where: ``tracking_uri``, else the environment's ``MLFLOW_TRACKING_URI``, else the local
 file store ``runs/mlruns`` (MLflow 3 keeps its file store in maintenance mode and asks for
 ``MLFLOW_ALLOW_FILE_STORE=true``, which this callback sets for that store only).
-Tracking never fails a job or a sweep: a run that cannot be logged prints one line.
+Logging never fails a job or a sweep: a run that cannot be logged prints one line.
 A tracking server that cannot be reached costs seconds, not minutes: the launching
-process asks it once (:func:`unreachable`, :data:`PROBE_TIMEOUT_S`) and turns tracking
+process asks it once (:func:`unreachable`, :data:`PROBE_TIMEOUT_S`) and turns logging
 off for the command with one line when it does not answer; MLflow's own HTTP timeout and
 retries are bounded (:data:`HTTP_DEFAULTS`, unless the environment sets them), and a
 process whose logging fails to connect stops trying for its later jobs.
@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import json
 import os
+import sys
 import time
 from pathlib import Path
 from typing import Any
@@ -67,11 +68,11 @@ HTTP_DEFAULTS = {"MLFLOW_HTTP_REQUEST_TIMEOUT": "10", "MLFLOW_HTTP_REQUEST_MAX_R
 #: ``requests``' errors for a server that cannot be reached or does not answer (by name:
 #: requests is MLflow's dependency, not ours)
 CONNECTION_ERRORS = ("ConnectionError", "ConnectTimeout", "ReadTimeout", "Timeout")
-#: tracking URIs this process could not reach (no more attempts for its later jobs)
+#: MLflow tracking URIs this process could not reach (no more attempts for its later jobs)
 _UNREACHABLE: set[str] = set()
 
 
-class TrackingUnavailable(RuntimeError):
+class LoggerUnavailable(RuntimeError):
     """MLflow is not installed: the message says how to install it."""
 
 
@@ -126,9 +127,9 @@ class MlflowCallback(Callback):
         from compliant_docking.extras import MissingExtra, require
 
         try:
-            require("tracking", "mlflow.tracking")
+            require("logger", "mlflow.tracking")
         except MissingExtra as exc:
-            raise TrackingUnavailable(str(exc)) from None
+            raise LoggerUnavailable(str(exc)) from None
         from mlflow.tracking import MlflowClient
 
         uri = self.uri or self.resolve_uri()
@@ -140,12 +141,12 @@ class MlflowCallback(Callback):
 
     def _reachable(self) -> bool:
         """Ask the store once (launching process); False, said in one line, when it does not
-        answer: tracking is then off for this command (``self.uri`` None, carried to the jobs)."""
+        answer: logging is then off for this command (``self.uri`` None, carried to the jobs)."""
         why = unreachable(self.uri) if self.uri else None
         if why is None:
             return True
         emit(
-            f"mlflow: tracking off: {self.uri} did not answer within {PROBE_TIMEOUT_S:g} s ({why}); "
+            f"mlflow: logging off: {self.uri} did not answer within {PROBE_TIMEOUT_S:g} s ({why}); "
             "the results are in the run directories as always"
         )
         self.uri, self.off = None, True
@@ -179,8 +180,8 @@ class MlflowCallback(Callback):
             self.parent_run_id = self._parent(client, experiment_id, sweep_dir, config)
             SweepSession.current().after_finish.append(self._finish_parent)
             emit(f"mlflow: sweep → run {self.parent_run_id} of experiment {self.experiment!r} at {self.uri}")
-        except Exception as exc:  # tracking must never stop a sweep
-            emit(f"mlflow: tracking off for this sweep ({type(exc).__name__}: {exc})")
+        except Exception as exc:  # logging must never stop a sweep
+            emit(f"mlflow: logging off for this sweep ({type(exc).__name__}: {exc})")
             self.parent_run_id = None
             self.uri = None
 
@@ -228,7 +229,7 @@ class MlflowCallback(Callback):
                 self.parent_run_id, metrics=[Metric(k, float(v), now, 0) for k, v in counts.items()]
             )
             client.set_terminated(self.parent_run_id, "KILLED" if outcome.aborted else "FINISHED")
-        except Exception as exc:  # tracking never changes a sweep's outcome
+        except Exception as exc:  # logging never changes a sweep's outcome
             emit(f"mlflow: could not finish the sweep's run ({type(exc).__name__}: {exc})")
 
     # ------------------------------------------------------------------ the job's process
@@ -236,7 +237,7 @@ class MlflowCallback(Callback):
         from compliant_docking.sweep import resume
 
         if self.off or getattr(job_return, "_return_value", None) == resume.SKIPPED:
-            return  # tracking is off (said once), or a resumed sweep kept this job: logged when it ran
+            return  # logging is off (said once), or a resumed sweep kept this job: logged when it ran
         out_dir = Path(str(config.hydra.runtime.output_dir))
         uri = self.uri or self.resolve_uri()
         if uri in _UNREACHABLE:
@@ -245,7 +246,7 @@ class MlflowCallback(Callback):
             run_id = self.log_job(out_dir, _task_config(config, job_return))
             if self.parent_run_id is None:  # a single run: say where it went
                 emit(f"mlflow: run {run_id} of experiment {self.experiment!r} at {uri}")
-        except Exception as exc:  # tracking never fails a job
+        except Exception as exc:  # logging never fails a job
             if _is_connection_error(exc):
                 _UNREACHABLE.add(uri)
                 emit(
@@ -302,6 +303,27 @@ class MlflowCallback(Callback):
         config_file = out_dir / rundir.HYDRA_DIR / rundir.CONFIG_FILE
         if config_file.is_file():
             client.log_artifact(run_id, str(config_file), "hydra")
+
+
+class Renamed(Callback):
+    """A deprecated spelling on the command line (``+tracking=mlflow``, now ``+logger=mlflow``):
+    one line on stderr when the command starts (the launching process); nothing else changes."""
+
+    def __init__(self, old: str, new: str) -> None:
+        self.old, self.new = old, new
+
+    def _say(self) -> None:
+        print(
+            f'compliant-docking: {self.old} is deprecated: use {self.new} (in this project "tracking" '
+            "means path following: trajectory=tracking); the old spelling will be removed.",
+            file=sys.stderr,
+        )
+
+    def on_run_start(self, config: DictConfig, **kwargs: Any) -> None:
+        self._say()
+
+    def on_multirun_start(self, config: DictConfig, **kwargs: Any) -> None:
+        self._say()
 
 
 def _is_connection_error(exc: BaseException) -> bool:
