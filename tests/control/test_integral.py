@@ -4,7 +4,7 @@ clamp and lateral projection, and a constant disturbance removed by every contro
 import numpy as np
 import pytest
 
-from compliant_docking.control.integral import PositionIntegral
+from compliant_docking.control.integral import PoseIntegral
 from compliant_docking.sim.simulate import prepare
 from tests.helpers import FREE_SPACE_HOLD, make_cfg, push_at_tcp
 
@@ -13,7 +13,7 @@ FREE = np.zeros(6)
 
 
 def test_position_integral_lateral_freeze_and_clamp():
-    pi = PositionIntegral(100.0, 2.0, AXIS, 0.001, lateral_only=True, freeze_force=1.0, latch=False)
+    pi = PoseIntegral(100.0, 2.0, AXIS, 0.001, lateral_only=True, freeze_force=1.0, latch=False)
     for _ in range(1000):  # 1 s of a 1 mm error along x and 5 mm along the axis
         force = np.array(pi.update(np.array([0.001, 0.0, -0.005]), FREE))
     assert np.allclose(force, [100.0 * 0.001 * 1.0, 0.0, 0.0])  # ki ∫e dt, axis ignored
@@ -27,7 +27,7 @@ def test_position_integral_lateral_freeze_and_clamp():
     assert np.linalg.norm(force) == pytest.approx(2.0)
     force = pi.update(np.array([-0.01, 0.0, 0.0]), FREE)  # a reversed error acts at once
     assert np.linalg.norm(force) < 2.0
-    every_axis = PositionIntegral(100.0, 2.0, AXIS, 0.001, lateral_only=False, freeze_force=1.0, latch=False)
+    every_axis = PoseIntegral(100.0, 2.0, AXIS, 0.001, lateral_only=False, freeze_force=1.0, latch=False)
     assert every_axis.update(np.array([0.0, 0.0, -0.005]), FREE)[2] == pytest.approx(-0.0005)
     assert every_axis.diagnostics()["integral_final_force_N"] == pytest.approx(0.0005)
 
@@ -43,7 +43,7 @@ def test_latched_integral_cannot_wind_up_in_a_fall():
     history += [(np.array([0.0, 0.0, -0.010]), FREE)] * 500  # the fall: 10 mm behind, no force
     forces = {}
     for latch in (True, False):
-        pi = PositionIntegral(2000.0, 10.0, AXIS, 0.001, lateral_only=False, freeze_force=1.0, latch=latch)
+        pi = PoseIntegral(2000.0, 10.0, AXIS, 0.001, lateral_only=False, freeze_force=1.0, latch=latch)
         trace = [np.array(pi.update(e, w)) for e, w in history]
         forces[latch] = trace
     at_contact = forces[True][200]
@@ -54,9 +54,9 @@ def test_latched_integral_cannot_wind_up_in_a_fall():
 
 def test_position_integral_rejects_meaningless_settings():
     with pytest.raises(ValueError, match="integral_gain"):
-        PositionIntegral(0.0, 2.0, AXIS, 0.001, lateral_only=False, freeze_force=1.0, latch=False)
+        PoseIntegral(0.0, 2.0, AXIS, 0.001, lateral_only=False, freeze_force=1.0, latch=False)
     with pytest.raises(ValueError, match="integral_freeze_force"):
-        PositionIntegral(10.0, 2.0, AXIS, 0.001, lateral_only=False, freeze_force=-1.0, latch=False)
+        PoseIntegral(10.0, 2.0, AXIS, 0.001, lateral_only=False, freeze_force=-1.0, latch=False)
 
 
 def test_integral_gain_zero_means_no_integral():
