@@ -67,7 +67,15 @@ def test_orientation_integral_is_frozen_from_the_first_contact():
     torques = {}
     for latch in (True, False):
         pi = PoseIntegral(
-            0.0, 10.0, AXIS, 0.001, lateral_only=False, freeze_force=1.0, latch=latch, rot_gain=150.0, rot_limit=1.0
+            0.0,
+            10.0,
+            AXIS,
+            0.001,
+            lateral_only=False,
+            freeze_force=1.0,
+            latch=latch,
+            rot_gain=150.0,
+            rot_limit=1.0,
         )
         torques[latch] = [np.array((pi.update(none, w, e), pi.torque)[1]) for e, w in history]
         assert pi.force == (0.0, 0.0, 0.0)  # the position part off (gain 0)
@@ -76,13 +84,17 @@ def test_orientation_integral_is_frozen_from_the_first_contact():
     assert all(np.array_equal(m, at_contact) for m in torques[True][200:])
     assert np.linalg.norm(torques[False][-1]) == pytest.approx(1.0)  # wound up to the clamp
     # the freeze reads the force only: a moment below it integrates (in free space, none)
-    pi = PoseIntegral(0.0, 10.0, AXIS, 0.001, lateral_only=False, freeze_force=1.0, latch=True, rot_gain=150.0)
+    pi = PoseIntegral(
+        0.0, 10.0, AXIS, 0.001, lateral_only=False, freeze_force=1.0, latch=True, rot_gain=150.0
+    )
     pi.update(none, twisted, tilt)
     assert pi.torque[0] == pytest.approx(150.0 * 0.01 * 0.001) and not pi.latched
 
 
 def test_orientation_integral_clamps_without_winding_up():
-    pi = PoseIntegral(100.0, 2.0, AXIS, 0.001, lateral_only=True, freeze_force=1.0, latch=True, rot_gain=150.0)
+    pi = PoseIntegral(
+        100.0, 2.0, AXIS, 0.001, lateral_only=True, freeze_force=1.0, latch=True, rot_gain=150.0
+    )
     for _ in range(100_000):  # 100 s of a 0.1 rad error about z (the docking axis: every axis)
         pi.update(np.zeros(3), FREE, np.array([0.0, 0.0, 0.1]))
     assert np.linalg.norm(pi.torque) == pytest.approx(1.0)  # the default clamp
@@ -178,9 +190,12 @@ def test_fr3_arrives_straight_on_a_short_approach(controller):
     under 0.3°, and turned off the tilt is back."""
     assert tilt_at_first_contact(f"controller={controller}", *SHORT_APPROACH) < 0.3
     if controller == "impedance":
-        assert tilt_at_first_contact(
-            f"controller={controller}", "controller.integral_rot_gain=0", *SHORT_APPROACH
-        ) > 0.6
+        assert (
+            tilt_at_first_contact(
+                f"controller={controller}", "controller.integral_rot_gain=0", *SHORT_APPROACH
+            )
+            > 0.6
+        )
 
 
 @pytest.mark.slow

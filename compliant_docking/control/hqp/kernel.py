@@ -162,8 +162,10 @@ def integral_step(cst, ws, wrench, e0, e1, e2, u0, u1, u2, rot_err):
     if size > ws[W_I_MAX]:
         ws[W_I_MAX] = size
     if cst[P_I_ROT_GAIN] != 0.0:
-        size = clamped_step(ws, W_I_ROT_STATE, W_I_TORQUE, rot_err[0], rot_err[1], rot_err[2],
-                            cst[P_I_DT], cst[P_I_ROT_GAIN], cst[P_I_ROT_LIMIT])
+        r0, r1, r2, dt = rot_err[0], rot_err[1], rot_err[2], cst[P_I_DT]
+        size = clamped_step(
+            ws, W_I_ROT_STATE, W_I_TORQUE, r0, r1, r2, dt, cst[P_I_ROT_GAIN], cst[P_I_ROT_LIMIT]
+        )
         if size > ws[W_I_ROT_MAX]:
             ws[W_I_ROT_MAX] = size
 
