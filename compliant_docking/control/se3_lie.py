@@ -244,8 +244,7 @@ class SE3LieController(Controller):
             self._w_integral[1] = integral.torque
         W.dot(arm.rot, out=body)
         rows = body.tolist()
-        M_i = rows.pop() if integral is not None else None
-        F_i = rows.pop() if integral is not None else None
+        F_i = rows.pop(14) + rows.pop(14) if integral is not None else None  # [F_i; M_i]
         ((c00, c01, c02), (c10, c11, c12), (c20, c21, c22), (e0, e1, e2),
          (pv0, pv1, pv2), (pw0, pw1, pw2), (ja0, ja1, ja2), (jb0, jb1, jb2),
          (dv0, dv1, dv2), (dw0, dw1, dw2), (da0, da1, da2), (db0, db1, db2),
@@ -314,8 +313,7 @@ class SE3LieController(Controller):
         else:
             F_tilde = (-f0, -f1, -f2, -m0, -m1, -m2)
         if F_i is not None:  # a gains A⁻¹[RᵀF_i; RᵀM_i]: F̃ − [F_i; M_i] enters A⁻¹(F̃ − D·Ṽ − dexp⁻ᵀKλ)
-            i0, i1, i2 = F_i
-            i3, i4, i5 = M_i
+            i0, i1, i2, i3, i4, i5 = F_i
             F_tilde = (F_tilde[0] - i0, F_tilde[1] - i1, F_tilde[2] - i2,
                        F_tilde[3] - i3, F_tilde[4] - i4, F_tilde[5] - i5)
         V_tilde = (t0, t1, t2, t3, t4, t5)
