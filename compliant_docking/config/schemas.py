@@ -139,14 +139,12 @@ class PhysicsConfig:
 # --------------------------------------------------------------------------- controllers
 @dataclass
 class ControllerConfig:
-    """Fields every controller accepts."""
+    """Fields every controller accepts (``integral_*``: docs/controllers/integral.md)."""
 
     _target_: str = MISSING
     name: str = MISSING
     friction_comp: FrictionComp = MISSING
     use_force_feedback: bool = MISSING  # feed the measured wrench to the law (off: pure motion control)
-    # integral action on the pose error, a force and a moment added to the stiffness
-    # wrench (docs/controllers/integral.md)
     integral_gain: float = at_least(0.0, unit="N/(m·s)")  # 0: off
     integral_limit: float = positive(unit="N")  # clamp of the integral force's norm
     integral_lateral_only: bool = MISSING  # only the error perpendicular to the docking axis

@@ -7,6 +7,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pinocchio as pin
 
 
 class PoseIntegral:
@@ -76,12 +77,6 @@ class PoseIntegral:
         self.max_force = 0.0
         self.max_torque = 0.0
 
-    @property
-    def integrating(self) -> bool:
-        """Whether the orientation part needs this step's e_R (False once latched, or
-        without it): the laws that would compute e_R only for it skip that then."""
-        return self.rot_gain != 0.0 and not self.latched
-
     def update(self, error: np.ndarray, wrench: np.ndarray, rot_error=None) -> tuple[float, float, float]:
         """F_i [N, world] after this step's error x_d − x [m], measured wrench [f; m] and,
         with the orientation part, orientation error e_R [rad, world]; M_i is ``torque``."""
@@ -106,6 +101,15 @@ class PoseIntegral:
             if size > self.max_torque:
                 self.max_torque = size
         return self.force
+
+    def update_pose(
+        self, error: np.ndarray, wrench: np.ndarray, rot_d: np.ndarray, rot_T: np.ndarray
+    ) -> tuple:
+        """[F_i; M_i] (6 floats, world) after this step, for the laws that do not form e_R
+        themselves: e_R = log3(R_d Rᵀ) from R_d and Rᵀ, only while the orientation part
+        still integrates (then ``update``)."""
+        rot_error = pin.log3(rot_d.dot(rot_T)) if self.rot_gain != 0.0 and not self.latched else None
+        return self.update(error, wrench, rot_error) + self.torque
 
     def diagnostics(self) -> dict:
         out = {

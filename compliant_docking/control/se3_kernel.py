@@ -11,8 +11,7 @@ friction feed-forward.
 What stays in Python, every step or on some steps:
 
 * the integral action (:class:`~.integral.PoseIntegral`, its own Python floats): its wrench
-  [F_i; M_i] is an input of the kernel (e_R = log3(R_d Rᵀ) for it by pinocchio, only while
-  the orientation part integrates);
+  [F_i; M_i] (``update_pose``) is an input of the kernel;
 * the steps on which :class:`~.base.TaskInertia` checks the condition number (every
   ``check_every`` steps, every step while above the threshold): the kernel stops once V̇_ref
   is formed (``STAGE``), ``TaskInertia.solve`` (its ``dposv``, ``dpocon`` and fallback) applies
@@ -35,7 +34,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import pinocchio as pin
 
 from compliant_docking.control.jit import kernel
 from compliant_docking.control.kernel_blocks import (
@@ -365,8 +363,7 @@ class TwistKernel:
             F_i = self._no_force
         else:
             np.subtract(ref.pos, arm.pos, out=self._err)
-            rot_err = pin.log3(ref.rot.dot(arm.rot_T)) if integral.integrating else None
-            F_i = integral.update(self._err, wrench, rot_err) + integral.torque
+            F_i = integral.update_pose(self._err, wrench, ref.rot, arm.rot_T)
         # steps with TaskInertia's condition-number check end in numpy (staged); the floor's
         # refresh runs in the kernel; the counters of both objects are advanced here
         staged = ti.due()

@@ -88,7 +88,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import pinocchio as pin
 from scipy.linalg import cho_factor, cho_solve
 
 from compliant_docking.config import SE3Formulation as Formulation
@@ -239,9 +238,7 @@ class SE3LieController(Controller):
             w_wrench[:] = wrench
         integral = self.integral
         if integral is not None:  # F_i, M_i (world) ride along to TCP axes
-            rot_err = pin.log3(ref.rot.dot(arm.rot_T)) if integral.integrating else None
-            self._w_integral[0] = integral.update(w_err, wrench, rot_err)
-            self._w_integral[1] = integral.torque
+            self._w_integral.reshape(6)[:] = integral.update_pose(w_err, wrench, ref.rot, arm.rot_T)
         W.dot(arm.rot, out=body)
         rows = body.tolist()
         F_i = rows.pop(14) + rows.pop(14) if integral is not None else None  # [F_i; M_i]
@@ -313,9 +310,7 @@ class SE3LieController(Controller):
         else:
             F_tilde = (-f0, -f1, -f2, -m0, -m1, -m2)
         if F_i is not None:  # a gains A⁻¹[RᵀF_i; RᵀM_i]: F̃ − [F_i; M_i] enters A⁻¹(F̃ − D·Ṽ − dexp⁻ᵀKλ)
-            i0, i1, i2, i3, i4, i5 = F_i
-            F_tilde = (F_tilde[0] - i0, F_tilde[1] - i1, F_tilde[2] - i2,
-                       F_tilde[3] - i3, F_tilde[4] - i4, F_tilde[5] - i5)
+            F_tilde = tuple(a - b for a, b in zip(F_tilde, F_i))
         V_tilde = (t0, t1, t2, t3, t4, t5)
 
         J, Jb, Rt = arm.J, self._Jb, arm.rot_T
