@@ -142,19 +142,19 @@ CONDITION = Range(low=1.0, low_open=True)  # every controller's condition_thresh
 
 @dataclass
 class ControllerConfig:
-    """Fields every controller accepts."""
+    """Fields every controller accepts (``integral_*``: docs/controllers/integral.md)."""
 
     _target_: str = MISSING
     name: str = MISSING
     friction_comp: FrictionComp = MISSING
     use_force_feedback: bool = MISSING  # feed the measured wrench to the law (off: pure motion control)
-    # integral action on the position error, a force added to the stiffness force
-    # (docs/controllers/integral.md)
     integral_gain: float = at_least(0.0, unit="N/(m·s)")  # 0: off
     integral_limit: float = positive(unit="N")  # clamp of the integral force's norm
     integral_lateral_only: bool = MISSING  # only the error perpendicular to the docking axis
     integral_freeze_force: float = at_least(0.0, unit="N")  # frozen while the measured ‖f‖ exceeds this
     integral_latch: bool = MISSING  # true: frozen from the first such step to the end of the run
+    integral_rot_gain: float = at_least(0.0, unit="N·m/(rad·s)")  # on the orientation error; 0: off
+    integral_rot_limit: float = positive(unit="N·m")  # clamp of the integral moment's norm
 
 
 @dataclass

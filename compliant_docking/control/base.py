@@ -21,7 +21,7 @@ import numpy as np
 from scipy.linalg import lapack
 
 from compliant_docking.config import FrictionComp
-from compliant_docking.control.integral import PositionIntegral
+from compliant_docking.control.integral import PoseIntegral
 from compliant_docking.control.kernel_blocks import FRICTION_CODES, YIELD_SPEED, friction_feed_forward
 from compliant_docking.planning.base import Reference
 from compliant_docking.sim.context import ControlContext
@@ -161,7 +161,8 @@ class TaskInertia:
 
 class Controller(ABC):
     """Base class: holds the context, the friction feed-forward and the optional integral
-    action on the position error (``integral`` is None when ``integral_gain`` is 0)."""
+    action on the pose error (``integral`` is None when ``integral_gain`` and
+    ``integral_rot_gain`` are 0)."""
 
     def __init__(
         self,
@@ -174,15 +175,17 @@ class Controller(ABC):
         integral_lateral_only: bool,
         integral_freeze_force: float,
         integral_latch: bool,
+        integral_rot_gain: float,
+        integral_rot_limit: float,
     ):
         self.ctx = context
         self.arm = context.arm
         self.name = name
         self.use_force_feedback = bool(use_force_feedback)
         self.friction = FrictionFeedForward(context.joint_friction, context.joint_damping, friction_comp)
-        # a force the law adds to its stiffness force (docs/controllers/integral.md)
+        # a force and a moment the law adds to its stiffness wrench (docs/controllers/integral.md)
         self.integral = (
-            PositionIntegral(
+            PoseIntegral(
                 integral_gain,
                 integral_limit,
                 context.axis,
@@ -190,8 +193,10 @@ class Controller(ABC):
                 lateral_only=integral_lateral_only,
                 freeze_force=integral_freeze_force,
                 latch=integral_latch,
+                rot_gain=integral_rot_gain,
+                rot_limit=integral_rot_limit,
             )
-            if integral_gain
+            if integral_gain or integral_rot_gain
             else None
         )
 

@@ -12,8 +12,8 @@ settles at a displacement F/k. Without force feedback the w_ext terms vanish.
 
 Options (docs/controllers/impedance.md, integral.md): ``apparent_inertia_floor`` replaces
 W by W_eff ⪰ ratio·Λ (a deviation from §1 that keeps the one-step-old force feedback
-stable; null: the law of §1), and the integral action adds a force F_i to K e:
-a = ν̇_d + W_eff⁻¹(w_ext + K e + F_i + D (ν_d − ν)).
+stable; null: the law of §1), and the integral action adds a wrench [F_i; M_i] to K e:
+a = ν̇_d + W_eff⁻¹(w_ext + K e + [F_i; M_i] + D (ν_d − ν)).
 """
 
 from __future__ import annotations
@@ -65,7 +65,7 @@ class ImpedanceController(Controller):
         )
         self._G_config = self.G.copy()  # the config's gains (set_stiffness_scales(1, 1, 1))
         self._gains = (W_inv, K, D)
-        self._w_inv_m = 1.0 / float(m)
+        self._w_inv_m, self._w_inv_rot = 1.0 / float(m), 1.0 / float(m_rot)
         self._z = np.zeros(18)
         self._z_pos, self._z_rot = self._z[0:3], self._z[3:6]
         self._z_twist, self._z_wrench = self._z[6:12], self._z[12:18]
@@ -108,12 +108,19 @@ class ImpedanceController(Controller):
         np.subtract(ref.twist, arm.twist, out=self._z_twist)
         self._z_wrench[:] = wrench
         a = self.G.dot(self._z)  # W⁻¹(K e + D ė + w)
-        if self.integral is not None:  # + W⁻¹F_i
-            i0, i1, i2 = self.integral.update(self._z_pos, wrench)
+        integral = self.integral
+        if integral is not None:  # + W⁻¹[F_i; M_i]
+            i0, i1, i2 = integral.update(self._z_pos, wrench, self._z_rot)
             w_inv = self._w_inv_m
             a[0] += w_inv * i0
             a[1] += w_inv * i1
             a[2] += w_inv * i2
+            if integral.rot_gain != 0.0:
+                i3, i4, i5 = integral.torque
+                w_inv = self._w_inv_rot
+                a[3] += w_inv * i3
+                a[4] += w_inv * i4
+                a[5] += w_inv * i5
         J, v = arm.J, arm.v
         JMinv = J.dot(arm.Minv)
         if self.inertia_floor is not None:

@@ -1,15 +1,17 @@
-"""Integral action on the TCP position error, an option of every controller
-(``integral_*``; docs/controllers/integral.md). Not in docs/control_laws.md."""
+"""Integral action on the TCP pose error, an option of every controller (``integral_*``;
+docs/controllers/integral.md, docs/control_laws.md "Integral action"): a force from the
+position error and a moment from the orientation error, frozen by one latch."""
 
 from __future__ import annotations
 
 import math
 
 import numpy as np
+import pinocchio as pin
 
 
-class PositionIntegral:
-    """Integral action on the TCP position error, as a force the law adds to K e.
+class PoseIntegral:
+    """Integral action on the TCP pose error: a force and a moment the law adds to K e.
 
     Each step, while the measured contact force ‖f‖ is at most ``freeze_force`` (with
     ``latch``: until the first step it exceeds it; frozen from then on):
@@ -21,13 +23,19 @@ class PositionIntegral:
     Latched, a contact lost again (the plug released from a stuck chamfer, falling onto
     the seat below the freeze force) cannot wind it up either.
 
+    The orientation part (``rot_gain`` > 0) does the same on the orientation error
+    e_R = log3(R_d Rᵀ) (world axes, every axis) under the same freeze and latch:
+    I_R ← I_R + dt·e_R, M_i = rot_gain·I_R, its norm clamped at ``rot_limit``.
+
     Why: joint friction the model lacks (the FR3's 1.14 N·m) holds the arm wherever the
     stiffness force at the TCP is below the friction's reflection there, so a compliant
     arm arrives off the axis (HQP on the FR3: 1.3 mm, three times the clearance). The
     research code's FR3 impedance used a position integral (ki = 150) for that reason.
     Every axis by default: the axial lag friction causes makes the plug reach the seat
     late and fast (docs/controllers/integral.md); the integral frozen at contact adds its
-    axial part (≈1 N on the FR3) to the press force k × overshoot.
+    axial part (≈1 N on the FR3) to the press force k × overshoot. Likewise the wrist's
+    friction (0.25-0.76 N·m) against k_rot = 25 N·m/rad tilts the FR3's plug by ~1° at
+    arrival; the orientation part takes it out in free space and keeps it frozen in contact.
     """
 
     def __init__(
@@ -40,14 +48,21 @@ class PositionIntegral:
         lateral_only: bool,
         freeze_force: float,
         latch: bool,
+        rot_gain: float = 0.0,
+        rot_limit: float = 1.0,
     ):
-        if not gain > 0.0 or not limit > 0.0 or not freeze_force >= 0.0:
+        if not gain >= 0.0 or not rot_gain >= 0.0 or not gain + rot_gain > 0.0:
             raise ValueError(
-                f"controller.integral_gain and controller.integral_limit must be > 0 and "
-                f"controller.integral_freeze_force ≥ 0 (integral_gain 0 turns the integral "
-                f"action off); got {gain}, {limit}, {freeze_force}"
+                f"controller.integral_gain and controller.integral_rot_gain must be ≥ 0, one of "
+                f"them > 0 (both 0 turn the integral action off); got {gain}, {rot_gain}"
+            )
+        if not limit > 0.0 or not rot_limit > 0.0 or not freeze_force >= 0.0:
+            raise ValueError(
+                f"controller.integral_limit and controller.integral_rot_limit must be > 0 and "
+                f"controller.integral_freeze_force ≥ 0; got {limit}, {rot_limit}, {freeze_force}"
             )
         self.gain, self.limit, self.dt = float(gain), float(limit), float(dt)
+        self.rot_gain, self.rot_limit = float(rot_gain), float(rot_limit)
         u = np.asarray(axis, dtype=float) / np.linalg.norm(axis)
         self.axis = tuple(u.tolist()) if lateral_only else None  # error component removed
         self.freeze_sq = float(freeze_force) ** 2
@@ -56,11 +71,15 @@ class PositionIntegral:
         # 3-vectors as Python floats: a few float operations cost less than numpy calls
         self.state = (0.0, 0.0, 0.0)  # ∫P e dt [m·s]
         self.force = (0.0, 0.0, 0.0)  # F_i [N]
+        self.rot_state = (0.0, 0.0, 0.0)  # ∫e_R dt [rad·s]
+        self.torque = (0.0, 0.0, 0.0)  # M_i [N·m]
         self.frozen_steps = 0
         self.max_force = 0.0
+        self.max_torque = 0.0
 
-    def update(self, error: np.ndarray, wrench: np.ndarray) -> tuple[float, float, float]:
-        """F_i [N, world] after this step's error x_d − x [m] and measured wrench [f; m]."""
+    def update(self, error: np.ndarray, wrench: np.ndarray, rot_error=None) -> tuple[float, float, float]:
+        """F_i [N, world] after this step's error x_d − x [m], measured wrench [f; m] and,
+        with the orientation part, orientation error e_R [rad, world]; M_i is ``torque``."""
         f0, f1, f2, _, _, _ = wrench.tolist()
         if self.latched or f0 * f0 + f1 * f1 + f2 * f2 > self.freeze_sq:
             self.frozen_steps += 1
@@ -71,23 +90,47 @@ class PositionIntegral:
             u0, u1, u2 = self.axis
             along = e0 * u0 + e1 * u1 + e2 * u2
             e0, e1, e2 = e0 - along * u0, e1 - along * u1, e2 - along * u2
-        dt, gain = self.dt, self.gain
-        s0, s1, s2 = self.state
-        s0, s1, s2 = s0 + dt * e0, s1 + dt * e1, s2 + dt * e2
-        size = gain * math.sqrt(s0 * s0 + s1 * s1 + s2 * s2)
-        if size > self.limit:  # clamp the state with the force: no wind-up past the clamp
-            shrink = self.limit / size
-            s0, s1, s2 = s0 * shrink, s1 * shrink, s2 * shrink
-            size = self.limit
+        self.state, self.force, size = _clamped_step(self.state, e0, e1, e2, self.dt, self.gain, self.limit)
         if size > self.max_force:
             self.max_force = size
-        self.state = (s0, s1, s2)
-        self.force = (gain * s0, gain * s1, gain * s2)
+        if self.rot_gain != 0.0:
+            r0, r1, r2 = rot_error.tolist()
+            self.rot_state, self.torque, size = _clamped_step(
+                self.rot_state, r0, r1, r2, self.dt, self.rot_gain, self.rot_limit
+            )
+            if size > self.max_torque:
+                self.max_torque = size
         return self.force
 
+    def update_pose(
+        self, error: np.ndarray, wrench: np.ndarray, rot_d: np.ndarray, rot_T: np.ndarray
+    ) -> tuple:
+        """[F_i; M_i] (6 floats, world) after this step, for the laws that do not form e_R
+        themselves: e_R = log3(R_d Rᵀ) from R_d and Rᵀ, only while the orientation part
+        still integrates (then ``update``)."""
+        rot_error = pin.log3(rot_d.dot(rot_T)) if self.rot_gain != 0.0 and not self.latched else None
+        return self.update(error, wrench, rot_error) + self.torque
+
     def diagnostics(self) -> dict:
-        return {
+        out = {
             "integral_frozen_steps": self.frozen_steps,
             "integral_max_force_N": self.max_force,
             "integral_final_force_N": math.sqrt(sum(f * f for f in self.force)),
         }
+        if self.rot_gain != 0.0:
+            out["integral_max_torque_Nm"] = self.max_torque
+            out["integral_final_torque_Nm"] = math.sqrt(sum(m * m for m in self.torque))
+        return out
+
+
+def _clamped_step(state, e0, e1, e2, dt, gain, limit):
+    """(state + dt·e, gain·state, its norm), the state scaled back so the norm is at most
+    ``limit`` (no wind-up past the clamp). The compiled twin is hqp.kernel.clamped_step."""
+    s0, s1, s2 = state
+    s0, s1, s2 = s0 + dt * e0, s1 + dt * e1, s2 + dt * e2
+    size = gain * math.sqrt(s0 * s0 + s1 * s1 + s2 * s2)
+    if size > limit:  # clamp the state with the output
+        shrink = limit / size
+        s0, s1, s2 = s0 * shrink, s1 * shrink, s2 * shrink
+        size = limit
+    return (s0, s1, s2), (gain * s0, gain * s1, gain * s2), size

@@ -10,8 +10,8 @@ friction feed-forward.
 
 What stays in Python, every step or on some steps:
 
-* the integral action (:class:`~.integral.PositionIntegral`, its own Python floats): its force
-  F_i is an input of the kernel;
+* the integral action (:class:`~.integral.PoseIntegral`, its own Python floats): its wrench
+  [F_i; M_i] (``update_pose``) is an input of the kernel;
 * the steps on which :class:`~.base.TaskInertia` checks the condition number (every
   ``check_every`` steps, every step while above the threshold): the kernel stops once V̇_ref
   is formed (``STAGE``), ``TaskInertia.solve`` (its ``dposv``, ``dpocon`` and fallback) applies
@@ -114,6 +114,7 @@ def floor_refresh(S, w_sqrt, w_isqrt, ratio, PI, mem):
 def step(mode, k, refresh, Rd, pd, Vd, Ad, R, p, tw, jdv, J, Minv, M, v, h, wrench, Fi,
          par, PI, mem, work, lam_log):
     """One control step of the twist formulation (diagonal gains); see the module docstring.
+    ``Fi``: the integral wrench [F_i; M_i] (world axes).
 
     ``work`` (12×nv) receives J_b (rows 0-5) and J_b M⁻¹ (rows 6-11); ``mem`` the quantities
     of the step and τ; ``lam_log[k]`` λ (when k < its length)."""
@@ -143,6 +144,7 @@ def step(mode, k, refresh, Rd, pd, Vd, Ad, R, p, tw, jdv, J, Minv, M, v, h, wren
     else:
         f0 = f1 = f2 = m0 = m1 = m2 = 0.0
     i0, i1, i2 = body(Fi[0], Fi[1], Fi[2])
+    i3, i4, i5 = body(Fi[3], Fi[4], Fi[5])
 
     # --- λ = log6(T̃) = [J(w)⁻¹p̃; w], w = log3(R̃); refused at ‖w‖ ≥ π
     w0, w1, w2, th = _log3(c00, c10, c20, c01, c11, c21, c02, c12, c22)
@@ -192,7 +194,7 @@ def step(mode, k, refresh, Rd, pd, Vd, Ad, R, p, tw, jdv, J, Minv, M, v, h, wren
     mem[V_TILDE], mem[V_TILDE + 1], mem[V_TILDE + 2] = t0, t1, t2
     mem[V_TILDE + 3], mem[V_TILDE + 4], mem[V_TILDE + 5] = t3, t4, t5
 
-    # --- F̃ = Ad(T̃)⁻ᵀF_d − F_body − [RᵀF_i; 0]
+    # --- F̃ = Ad(T̃)⁻ᵀF_d − F_body − [RᵀF_i; RᵀM_i]
     if par[HAS_F_D] != 0.0:
         g0, g1, g2 = par[F_D], par[F_D + 1], par[F_D + 2]
         n0, n1, n2 = par[F_D + 3], par[F_D + 4], par[F_D + 5]
@@ -211,6 +213,9 @@ def step(mode, k, refresh, Rd, pd, Vd, Ad, R, p, tw, jdv, J, Minv, M, v, h, wren
     mem[F_TILDE] -= i0
     mem[F_TILDE + 1] -= i1
     mem[F_TILDE + 2] -= i2
+    mem[F_TILDE + 3] -= i3
+    mem[F_TILDE + 4] -= i4
+    mem[F_TILDE + 5] -= i5
     mem[F_BODY], mem[F_BODY + 1], mem[F_BODY + 2] = f0, f1, f2
     mem[F_BODY + 3], mem[F_BODY + 4], mem[F_BODY + 5] = m0, m1, m2
 
@@ -336,7 +341,7 @@ class TwistKernel:
         self.ctrl, self.floor, self.ti, self.integral = ctrl, floor, ctrl.task_inertia, ctrl.integral
         self.PI = floor.P_and_I if floor is not None else np.zeros((6, 12))
         self._err = np.zeros(3)
-        self._no_force = (0.0, 0.0, 0.0)
+        self._no_force = (0.0,) * 6
         self._warm_up(ctrl.arm)
 
     def _warm_up(self, arm) -> None:
@@ -358,7 +363,7 @@ class TwistKernel:
             F_i = self._no_force
         else:
             np.subtract(ref.pos, arm.pos, out=self._err)
-            F_i = integral.update(self._err, wrench)
+            F_i = integral.update_pose(self._err, wrench, ref.rot, arm.rot_T)
         # steps with TaskInertia's condition-number check end in numpy (staged); the floor's
         # refresh runs in the kernel; the counters of both objects are advanced here
         staged = ti.due()

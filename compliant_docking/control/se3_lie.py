@@ -190,11 +190,11 @@ class SE3LieController(Controller):
         # World vectors, one per row, turned into TCP-frame vectors by ONE product per step
         # (row x ↦ xR = (Rᵀx)ᵀ): rows 0-2 the columns of R_d | 3 p_d − p | 4-5 ṗ, ω |
         # 6-7 J̇v = [a; α] | 8-9 ṗ_d, ω_d | 10-11 p̈_d, α_d | 12-13 f, m
-        # | 14 the integral force F_i (only with integral action).
-        rows = 15 if self.integral is not None else 14
+        # | 14-15 the integral force F_i and moment M_i (only with integral action).
+        rows = 16 if self.integral is not None else 14
         self._world = np.zeros((rows, 3))
         self._body = np.zeros((rows, 3))
-        self._w_integral = self._world[14] if self.integral is not None else np.zeros(3)
+        self._w_integral = self._world[14:16] if self.integral is not None else np.zeros((2, 3))
         flat = self._world.reshape(3 * rows)
         self._w_err = self._world[3]
         self._w_twist, self._w_jdv = flat[12:18], flat[18:24]
@@ -237,11 +237,11 @@ class SE3LieController(Controller):
         if self.use_force_feedback:
             w_wrench[:] = wrench
         integral = self.integral
-        if integral is not None:  # F_i (world) rides along to TCP axes
-            self._w_integral[:] = integral.update(w_err, wrench)
+        if integral is not None:  # F_i, M_i (world) ride along to TCP axes
+            self._w_integral.reshape(6)[:] = integral.update_pose(w_err, wrench, ref.rot, arm.rot_T)
         W.dot(arm.rot, out=body)
         rows = body.tolist()
-        F_i = rows.pop() if integral is not None else None
+        F_i = rows.pop(14) + rows.pop(14) if integral is not None else None  # [F_i; M_i]
         ((c00, c01, c02), (c10, c11, c12), (c20, c21, c22), (e0, e1, e2),
          (pv0, pv1, pv2), (pw0, pw1, pw2), (ja0, ja1, ja2), (jb0, jb1, jb2),
          (dv0, dv1, dv2), (dw0, dw1, dw2), (da0, da1, da2), (db0, db1, db2),
@@ -309,9 +309,8 @@ class SE3LieController(Controller):
                        e0 * r1 - e1 * r0 + c02 * n0 + c12 * n1 + c22 * n2 - m2)
         else:
             F_tilde = (-f0, -f1, -f2, -m0, -m1, -m2)
-        if F_i is not None:  # a gains A⁻¹[RᵀF_i; 0]: F̃ − F_i enters A⁻¹(F̃ − D·Ṽ − dexp⁻ᵀKλ)
-            i0, i1, i2 = F_i
-            F_tilde = (F_tilde[0] - i0, F_tilde[1] - i1, F_tilde[2] - i2, *F_tilde[3:])
+        if F_i is not None:  # a gains A⁻¹[RᵀF_i; RᵀM_i]: F̃ − [F_i; M_i] enters A⁻¹(F̃ − D·Ṽ − dexp⁻ᵀKλ)
+            F_tilde = tuple(a - b for a, b in zip(F_tilde, F_i))
         V_tilde = (t0, t1, t2, t3, t4, t5)
 
         J, Jb, Rt = arm.J, self._Jb, arm.rot_T

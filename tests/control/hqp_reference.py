@@ -17,9 +17,9 @@ from compliant_docking.control.hqp.compliance import modal_damping, stiffness_sc
 from compliant_docking.control.hqp.manipulability import manipulability_gradient
 
 
-def reference_step(ctrl, arm, ref, wrench, preload: float, integral_force=(0.0, 0.0, 0.0)) -> dict:
+def reference_step(ctrl, arm, ref, wrench, preload: float, integral_wrench=(0.0,) * 6) -> dict:
     """The law's quantities at this step for the HQPController ``ctrl`` (its parameters),
-    ``preload`` the ramp's value of this step, ``integral_force`` F_i of this step."""
+    ``preload`` the ramp's value of this step, ``integral_wrench`` [F_i; M_i] of this step."""
     J, M, Minv, q, v, h = arm.J, arm.M, arm.Minv, arm.q, arm.v, arm.h
     F = max(np.linalg.norm(wrench) - ctrl.deadband, 0.0) if ctrl.use_force_feedback else 0.0
     s = stiffness_scale(F, ctrl.min_stiffness_ratio, ctrl.sigmoid_gain)
@@ -39,7 +39,8 @@ def reference_step(ctrl, arm, ref, wrench, preload: float, integral_force=(0.0, 
         D = modal_damping(lam_sqrt, (V * np.sqrt(eigval)) @ V.T, K_r)
     e = np.concatenate([arm.pos - ref.pos, pin.log3(arm.rot @ ref.rot.T)])
     F_r = -D @ (arm.twist - ref.twist) - K_r * e
-    F_r[:3] += np.asarray(integral_force) + preload * ctrl.axis
+    F_r[:3] += np.asarray(integral_wrench[:3]) + preload * ctrl.axis
+    F_r[3:] += np.asarray(integral_wrench[3:])
     b = ref.accel - arm.Jdot_v + lam_inv @ F_r
     JJ = J @ J.T + 1e-8 * np.eye(6)
     w = math.sqrt(np.linalg.det(JJ))

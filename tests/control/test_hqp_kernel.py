@@ -56,6 +56,12 @@ def _rotation(phi):
     return pin.exp3(np.asarray(phi, dtype=float))
 
 
+def _log3(R):
+    import pinocchio as pin
+
+    return pin.log3(R)
+
+
 def _check_steps(robot: str, *overrides: str, steps: int = 40, seed: int = 0, slow_ok=True) -> dict:
     """``steps`` random states through ctrl.compute; every buffer the constrained path reads
     compared with the reference. Returns how often each branch was taken."""
@@ -74,9 +80,10 @@ def _check_steps(robot: str, *overrides: str, steps: int = 40, seed: int = 0, sl
         arm.update(q, v)
         ref = _random_reference(rng, arm)
         wrench = rng.normal(scale=2.0, size=6) if k % 3 else np.zeros(6)
-        integral = (0.0, 0.0, 0.0)
+        integral = (0.0,) * 6
         if twin is not None:  # the integral action the kernel runs, in Python
-            integral = twin.update(ref.pos - arm.pos, wrench)
+            rot_err = _log3(ref.rot @ arm.rot.T)
+            integral = twin.update(ref.pos - arm.pos, wrench, rot_err) + twin.torque
         F = max(np.linalg.norm(wrench) - ctrl.deadband, 0.0)
         expected = reference_step(ctrl, arm, ref, wrench, ramp.update(F), integral)
         before = ctrl._fast_steps, ctrl.lambda_floor_steps, ctrl.modal_damping_steps, ctrl.singularity_steps
@@ -107,10 +114,11 @@ def _check_steps(robot: str, *overrides: str, steps: int = 40, seed: int = 0, sl
         ):
             cond = expected["cond"] if key in CONDITIONED else 0.0
             _close(actual, expected[key], key, cond, np.abs(expected["a_null"]).max() if key == "Na" else 0.0)
-        if twin is not None:  # kernel.integral_step and PositionIntegral: the same operations
+        if twin is not None:  # kernel.integral_step and PoseIntegral: the same operations
             ctrl._sync_integral()
             assert ctrl.integral.diagnostics() == twin.diagnostics()
             assert ctrl.integral.state == twin.state
+            assert ctrl.integral.rot_state == twin.rot_state
         if fast:
             _close(tau, expected["Z"][1, 2 * n :], "tau", expected["cond"])
             _close(ctrl._Z, expected["Z"], "Z", expected["cond"])
@@ -139,12 +147,15 @@ def test_kernel_matches_the_reference_with_preload_integral_and_each_friction_mo
 
 
 def test_kernel_integral_action_lateral_and_clamped():
-    """The integral action's other branches: lateral only, and a 0.05 N limit that clamps
-    after a few steps (its state and diagnostics compared exactly in _check_steps)."""
+    """The integral action's other branches: lateral only, and limits of 0.05 N and
+    0.002 N·m that clamp after a few steps (its state and diagnostics compared exactly in
+    _check_steps)."""
     _check_steps(
         "iiwa14",
         "controller.integral_gain=2000",
         "controller.integral_limit=0.05",
+        "controller.integral_rot_gain=500",
+        "controller.integral_rot_limit=0.002",
         "controller.integral_lateral_only=true",
         "controller.integral_freeze_force=3",
         steps=30,
@@ -159,6 +170,7 @@ def test_kernel_integral_action_unlatched():
         "iiwa14",
         "controller.integral_gain=2000",
         "controller.integral_latch=false",
+        "controller.integral_rot_gain=100",
         "controller.integral_freeze_force=3",
         steps=30,
         seed=4,

@@ -35,11 +35,11 @@ def close(a, b, rel):
 
 
 def _pair(sim):
-    """The FR3's se3_lie (floor, integral action, friction torque_unbiased) as configured, twice:
+    """The FR3's se3_lie (floor, integral action on position and orientation, friction yielding) as configured, twice:
     twist (compiled step) and lambda_space (numpy)."""
     params = OmegaConf.to_container(sim.cfg.controller, resolve=True)
     params.pop("_target_")
-    assert params["apparent_inertia_floor"] and params["integral_gain"]
+    assert params["apparent_inertia_floor"] and params["integral_gain"] and params["integral_rot_gain"]
     assert params["friction_comp"] == FrictionComp.yielding and sim.controller.friction.active
     make = lambda form: SE3LieController(sim.controller.ctx, **{**params, "formulation": form})  # noqa: E731
     return make("twist"), make("lambda_space")
@@ -81,6 +81,9 @@ def test_compiled_step_matches_lambda_space_on_the_fr3(monkeypatch):
     assert staged == [0, 10, 20]
     assert fast.inertia_floor.active_steps == slow.inertia_floor.active_steps > 0
     assert fast.integral.state == pytest.approx(slow.integral.state, rel=1e-12)
+    assert fast.integral.rot_state == pytest.approx(slow.integral.rot_state, rel=1e-12)
+    assert fast.integral.torque == pytest.approx(slow.integral.torque, rel=1e-12)
+    assert any(fast.integral.torque)  # the orientation part integrated before it latched
     assert fast.task_inertia._step == slow.task_inertia._step == 25
     d_fast, d_slow = fast.diagnostics(), slow.diagnostics()
     assert d_fast.keys() == d_slow.keys()

@@ -13,7 +13,7 @@ on the tool at the TCP (world axes; the sensor's or the momentum observer's):
   where this symmetric matrix is not positive definite);
 * reference wrench F_r = −D_r Δν − K_r e + F_pre, e = [x − x_d; log3(R R_dᵀ)],
   Δν = ν − ν_d, F_pre = p(t)·[axis; 0] the optional preload (:class:`PreloadRamp`), plus
-  [F_i; 0] with the optional integral action (docs/controllers/integral.md);
+  [F_i; M_i] with the optional integral action (docs/controllers/integral.md);
 * level 1 (Eq. 33-36): min ‖J q̈ + J̇v − (ν̇_d + Λ⁻¹F_r)‖² + 1e-8‖q̈‖² subject to the
   zero-order-hold predictions over dt_p
       |v + dt_p q̈| ≤ v_max,  q_min ≤ q + dt_p v + ½dt_p² q̈ ≤ q_max,  |M q̈ + ĥ| ≤ τ_max,
@@ -179,13 +179,15 @@ class HQPController(Controller):
         if self.integral is not None:  # its update runs in the kernel (kernel.integral_step)
             integral = self.integral
             lateral = integral.axis is not None
-            cst[K.P_I_GAIN : K.P_I_LATCH + 1] = (
+            cst[K.P_I_GAIN : K.P_I_ROT_LIMIT + 1] = (
                 integral.gain,
                 integral.limit,
                 integral.dt,
                 integral.freeze_sq,
                 lateral,
                 integral.latch,
+                integral.rot_gain,
+                integral.rot_limit,
             )
         parts = (self.K0, self._P, self.axis, self._T_ji, self._half, friction.f, friction.b, friction._scale)
         for start, part in zip(self._off, parts):
@@ -387,6 +389,9 @@ class HQPController(Controller):
             integral.state = tuple(ws[K.W_I_STATE : K.W_I_STATE + 3].tolist())
             integral.force = tuple(ws[K.W_INTEGRAL : K.W_INTEGRAL + 3].tolist())
             integral.frozen_steps, integral.max_force = int(ws[K.W_I_FROZEN]), float(ws[K.W_I_MAX])
+            integral.rot_state = tuple(ws[K.W_I_ROT_STATE : K.W_I_ROT_STATE + 3].tolist())
+            integral.torque = tuple(ws[K.W_I_TORQUE : K.W_I_TORQUE + 3].tolist())
+            integral.max_torque = float(ws[K.W_I_ROT_MAX])
             integral.latched = bool(ws[K.W_I_LATCHED])
 
     def diagnostics(self) -> dict:

@@ -28,14 +28,16 @@ FAST, SLOW, SLOW_OK1, MODAL, NOT_FINITE = 0, 1, 2, 3, 4
 P_DEADBAND, P_KMIN, P_KALPHA, P_THRESH, P_OMEGA, P_KSA = 0, 1, 2, 3, 4, 5
 P_INERTIA, P_USE_FF, P_FRICTION, P_FRICTION_MODE, P_EVERY, P_INTEGRAL, P_REG = 6, 7, 8, 9, 10, 11, 12
 P_I_GAIN, P_I_LIMIT, P_I_DT, P_I_FREEZE_SQ, P_I_LATERAL, P_I_LATCH = 13, 14, 15, 16, 17, 18  # integral
-N_PAR = 19
+P_I_ROT_GAIN, P_I_ROT_LIMIT = 19, 20  # the integral's orientation part
+N_PAR = 21
 # scalar state and results at the head of ``ws``
 W_PRELOAD = 0  # 4 floats: value, in contact, step, target (compliance.preload_step)
 W_FLOOR, W_MAX_COND, W_SINGULAR, W_FAST = 4, 5, 6, 7  # counters and the largest cond(Λ⁻¹)
 W_F, W_S, W_W, W_SQRT_S, W_INTEGRAL = 8, 9, 10, 11, 12  # F, s, w, √s, F_i (3)
 W_I_STATE, W_I_FROZEN, W_I_MAX = 15, 18, 19  # the integral's ∫P e dt (3), frozen steps, max ‖F_i‖
 W_I_LATCHED = 20  # 1 once the latched integral froze for good
-N_SCALARS = 21
+W_I_TORQUE, W_I_ROT_STATE, W_I_ROT_MAX = 21, 24, 27  # M_i (3), ∫e_R dt (3), max ‖M_i‖
+N_SCALARS = 28
 #: contact magnitude above which the preload ramps up [N] (docs/control_laws.md §2)
 PRELOAD_CONTACT_N = 1.0
 #: contact magnitude below which the contact counts as lost again [N] (hysteresis)
@@ -129,9 +131,25 @@ def _mat(a, off, field, rows, cols):
 
 
 @kernel
-def integral_step(cst, ws, wrench, e0, e1, e2, u0, u1, u2):
-    """control.integral.PositionIntegral.update, compiled (the same float operations in the
-    same order; the state in ws, the parameters in cst, u the docking axis)."""
+def clamped_step(ws, state, out, e0, e1, e2, dt, gain, limit):
+    """control.integral._clamped_step, compiled: ws[state:state+3] += dt·e, scaled back so
+    that gain·‖state‖ ≤ limit; ws[out:out+3] = gain·state; returns that norm."""
+    s0, s1, s2 = ws[state] + dt * e0, ws[state + 1] + dt * e1, ws[state + 2] + dt * e2
+    size = gain * math.sqrt(s0 * s0 + s1 * s1 + s2 * s2)
+    if size > limit:  # clamp the state with the output
+        shrink = limit / size
+        s0, s1, s2 = s0 * shrink, s1 * shrink, s2 * shrink
+        size = limit
+    ws[state], ws[state + 1], ws[state + 2] = s0, s1, s2
+    ws[out], ws[out + 1], ws[out + 2] = gain * s0, gain * s1, gain * s2
+    return size
+
+
+@kernel
+def integral_step(cst, ws, wrench, e0, e1, e2, u0, u1, u2, rot_err):
+    """control.integral.PoseIntegral.update, compiled (the same float operations in the
+    same order; the state in ws, the parameters in cst, u the docking axis, rot_err the
+    orientation error log3(R_d Rᵀ))."""
     f0, f1, f2 = wrench[0], wrench[1], wrench[2]
     if ws[W_I_LATCHED] != 0.0 or f0 * f0 + f1 * f1 + f2 * f2 > cst[P_I_FREEZE_SQ]:
         ws[W_I_FROZEN] += 1.0
@@ -140,17 +158,16 @@ def integral_step(cst, ws, wrench, e0, e1, e2, u0, u1, u2):
     if cst[P_I_LATERAL] != 0.0:  # drop the component along the docking axis
         along = e0 * u0 + e1 * u1 + e2 * u2
         e0, e1, e2 = e0 - along * u0, e1 - along * u1, e2 - along * u2
-    dt, gain = cst[P_I_DT], cst[P_I_GAIN]
-    s0, s1, s2 = ws[W_I_STATE] + dt * e0, ws[W_I_STATE + 1] + dt * e1, ws[W_I_STATE + 2] + dt * e2
-    size = gain * math.sqrt(s0 * s0 + s1 * s1 + s2 * s2)
-    if size > cst[P_I_LIMIT]:  # clamp the state with the force: no wind-up past the clamp
-        shrink = cst[P_I_LIMIT] / size
-        s0, s1, s2 = s0 * shrink, s1 * shrink, s2 * shrink
-        size = cst[P_I_LIMIT]
+    size = clamped_step(ws, W_I_STATE, W_INTEGRAL, e0, e1, e2, cst[P_I_DT], cst[P_I_GAIN], cst[P_I_LIMIT])
     if size > ws[W_I_MAX]:
         ws[W_I_MAX] = size
-    ws[W_I_STATE], ws[W_I_STATE + 1], ws[W_I_STATE + 2] = s0, s1, s2
-    ws[W_INTEGRAL], ws[W_INTEGRAL + 1], ws[W_INTEGRAL + 2] = gain * s0, gain * s1, gain * s2
+    if cst[P_I_ROT_GAIN] != 0.0:
+        r0, r1, r2, dt = rot_err[0], rot_err[1], rot_err[2], cst[P_I_DT]
+        size = clamped_step(
+            ws, W_I_ROT_STATE, W_I_TORQUE, r0, r1, r2, dt, cst[P_I_ROT_GAIN], cst[P_I_ROT_LIMIT]
+        )
+        if size > ws[W_I_ROT_MAX]:
+            ws[W_I_ROT_MAX] = size
 
 
 @kernel
@@ -178,10 +195,10 @@ def hqp_step(J, M, Minv, h, q, v, Jdot_v, twist, pos, ref_twist, ref_pos, ref_ac
     for i in range(6):
         DK[6 + i, i] = s * K0[i]
     preload_step(ws[W_PRELOAD : W_PRELOAD + 4], F)
-    if cst[P_INTEGRAL] != 0.0:  # F_i from x_d − x (docs/controllers/integral.md)
+    if cst[P_INTEGRAL] != 0.0:  # F_i, M_i from x_d − x, e_R (docs/controllers/integral.md)
         a = off[C_AXIS]
         e0, e1, e2 = ref_pos[0] - pos[0], ref_pos[1] - pos[1], ref_pos[2] - pos[2]
-        integral_step(cst, ws, wrench, e0, e1, e2, cst[a], cst[a + 1], cst[a + 2])
+        integral_step(cst, ws, wrench, e0, e1, e2, cst[a], cst[a + 1], cst[a + 2], rot_err)
 
     # Λ⁻¹ = J M⁻¹ Jᵀ (symmetric by construction), its eigendecomposition and floor
     for i in range(6):
@@ -254,7 +271,7 @@ def hqp_back(J, M, Minv, h, q, v, Jdot_v, twist, pos, ref_twist, ref_pos, ref_ac
     for i in range(6):
         for j in range(6):
             DK[i, j] *= ws[W_SQRT_S]
-    # F_r = [D_r; K_r]ᵀ [ν_d − ν; x_d − x; log3(R_d Rᵀ)] + [F_i; 0] + p·[axis; 0]
+    # F_r = [D_r; K_r]ᵀ [ν_d − ν; x_d − x; log3(R_d Rᵀ)] + [F_i; M_i] + p·[axis; 0]
     for i in range(6):
         z[i] = ref_twist[i] - twist[i]
     for i in range(3):
@@ -265,8 +282,11 @@ def hqp_back(J, M, Minv, h, q, v, Jdot_v, twist, pos, ref_twist, ref_pos, ref_ac
         for i in range(12):
             t += z[i] * DK[i, j]
         F_r[j] = t
-    for i in range(3):  # F_i (0 when off) and the preload along the axis
+    for i in range(3):  # F_i, M_i (0 when off) and the preload along the axis
         F_r[i] += ws[W_INTEGRAL + i] + preload * cst[off[C_AXIS] + i]
+    if cst[P_I_ROT_GAIN] != 0.0:
+        for i in range(3):
+            F_r[3 + i] += ws[W_I_TORQUE + i]
     # b = Λ⁻¹F_r + ν̇_d − J̇v
     for i in range(6):
         t = 0.0
