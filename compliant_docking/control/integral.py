@@ -9,6 +9,9 @@ import math
 import numpy as np
 import pinocchio as pin
 
+from compliant_docking.config.ranges import require
+from compliant_docking.config.schemas import ControllerConfig
+
 
 class PoseIntegral:
     """Integral action on the TCP pose error: a force and a moment the law adds to K e.
@@ -51,15 +54,12 @@ class PoseIntegral:
         rot_gain: float = 0.0,
         rot_limit: float = 1.0,
     ):
-        if not gain >= 0.0 or not rot_gain >= 0.0 or not gain + rot_gain > 0.0:
+        require(ControllerConfig, "controller", integral_gain=gain, integral_rot_gain=rot_gain,
+                integral_limit=limit, integral_rot_limit=rot_limit, integral_freeze_force=freeze_force)  # fmt: skip
+        if not gain + rot_gain > 0.0:
             raise ValueError(
-                f"controller.integral_gain and controller.integral_rot_gain must be ≥ 0, one of "
-                f"them > 0 (both 0 turn the integral action off); got {gain}, {rot_gain}"
-            )
-        if not limit > 0.0 or not rot_limit > 0.0 or not freeze_force >= 0.0:
-            raise ValueError(
-                f"controller.integral_limit and controller.integral_rot_limit must be > 0 and "
-                f"controller.integral_freeze_force ≥ 0; got {limit}, {rot_limit}, {freeze_force}"
+                "controller.integral_gain and controller.integral_rot_gain are both 0: the integral "
+                "action is off, so there is no integral to build (the controller builds none)"
             )
         self.gain, self.limit, self.dt = float(gain), float(limit), float(dt)
         self.rot_gain, self.rot_limit = float(rot_gain), float(rot_limit)

@@ -83,6 +83,28 @@ def test_the_constructor_refuses_in_the_config_checks_words(context, controller,
     assert str(refusal.value) == " ".join(refused)
 
 
+@pytest.mark.parametrize("controller", ["impedance", "hqp", "se3_lie"])
+@pytest.mark.parametrize(
+    "key, value",
+    [
+        ("integral_limit", "0"),
+        ("integral_rot_limit", "0"),
+        ("integral_freeze_force", "-1"),
+        ("integral_rot_gain", "-1"),
+    ],
+)
+def test_the_integral_refuses_in_the_config_checks_words(context, controller, key, value):
+    """The integral action (built when a gain is on) held its own copy of these ranges."""
+    cfg = make_cfg(
+        *FREE_SPACE, f"controller={controller}", "controller.integral_gain=100", f"controller.{key}={value}"
+    )
+    refused = [p for p in check(cfg) if _about(f"controller.{key}", p)]
+    assert refused, f"the config check accepts controller.{key}={value}"
+    with pytest.raises(ValueError) as refusal:
+        instantiate(cfg.controller, _partial_=True, _convert_="all")(context=context)
+    assert str(refusal.value) == " ".join(refused)
+
+
 def test_the_defaults_pass_both(context):
     """The check is not stricter than the config: every controller's defaults build."""
     for controller in ("impedance", "hqp", "se3_lie"):
