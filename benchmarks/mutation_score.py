@@ -66,6 +66,8 @@ MISALIGNMENT_TESTS = ("tests/sim/test_misalignment.py",)
 DOCKING_TIME_TESTS = ("tests/evaluation/test_docking_time.py", "tests/evaluation/test_docking.py")
 BOUNDARY_TESTS = ("tests/evaluation/test_map_boundaries.py",)
 LEAD_TESTS = ("tests/planning/test_lead.py",)
+HQP_KERNEL_TESTS = ("tests/control/test_hqp_kernel.py",)
+SE3_KERNEL_TESTS = ("tests/control/test_se3_kernel.py",)
 YIELD_TESTS = ("tests/control/test_base.py", "tests/control/test_friction_push.py")
 TRACKING_TESTS = ("tests/evaluation/test_tracking_gate.py",)
 SENSOR_TESTS = ("tests/sim/test_sensor.py", "tests/control/test_impedance.py")
@@ -1420,6 +1422,47 @@ MUTATIONS = (
         "if not float(limit) >= 0.0:",
         "a lead limit of 0 m accepted",
         LEAD_TESTS,
+    ),
+    # ------------------------------------------- the integral's latch and orientation part
+    Mutation(
+        "I1",
+        INTEGRAL,
+        "            self.latched = self.latch",
+        "            self.latched = False",
+        "the integral never latched: it integrates again when the contact is lost",
+        ("tests/control/test_integral.py",),
+    ),
+    Mutation(
+        "I2",
+        INTEGRAL,
+        "self.rot_state, r0, r1, r2, self.dt, self.rot_gain, self.rot_limit",
+        "self.rot_state, r0, r1, r2, self.dt, self.rot_gain, 1e9",
+        "the orientation integral never clamped",
+        ("tests/control/test_integral.py",),
+    ),
+    Mutation(
+        "I3",
+        INTEGRAL,
+        "            r0, r1, r2 = rot_error.tolist()",
+        "            r0, r1, r2 = (-rot_error).tolist()",
+        "the orientation integral pushes with the error, not against it",
+        ("tests/control/test_integral.py",),
+    ),
+    Mutation(
+        "I4",
+        HQP_KERNEL,
+        "            F_r[3 + i] += ws[W_I_TORQUE + i]",
+        "            F_r[3 + i] -= ws[W_I_TORQUE + i]",
+        "compiled HQP: the integral moment subtracted",
+        HQP_KERNEL_TESTS,
+    ),
+    Mutation(
+        "I5",
+        SE3_KERNEL,
+        "    i3, i4, i5 = body(Fi[3], Fi[4], Fi[5])",
+        "    i3, i4, i5 = 0.0, 0.0, 0.0",
+        "compiled se3_lie: the integral moment dropped",
+        SE3_KERNEL_TESTS,
     ),
     # ------------------------------------------- the yielding friction feed-forward
     Mutation(
