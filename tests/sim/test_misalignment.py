@@ -184,6 +184,8 @@ def test_a_tilt_of_60_degrees_or_more_either_way_is_refused(tilt):
             {"yaw_deg_range": [0.0, 1.0, 2.0], "seed": 0},
             "task.misalignment.yaw_deg_range must have 2 values; got 3",
         ),
+        ({"x_range": [0.0, 0.001, 0.002], "seed": 0}, "task.misalignment.x_range must have 2 values; got 3"),
+        ({"tilt_deg_range": [0.0], "seed": 0}, "task.misalignment.tilt_deg_range must have 2 values; got 1"),
         ({"x_range": [0.0, 0.001], "seed": -1}, "task.misalignment.seed must be an integer in [0, "),
         ({"x_range": [0.0, 0.001], "seed": None}, "task.misalignment.seed must be an integer >= 0 to draw"),
     ],
