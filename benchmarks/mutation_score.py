@@ -47,6 +47,7 @@ SHAPING = "compliant_docking/control/shaping.py"
 INTEGRAL = "compliant_docking/control/integral.py"
 PROVENANCE = "compliant_docking/run/provenance.py"
 RUNNER = "compliant_docking/run/runner.py"
+EXIT_CODES = "compliant_docking/exit_codes.py"
 TABLES = "compliant_docking/results/tables.py"
 MISALIGNMENT = "compliant_docking/sim/misalignment.py"
 VALIDATE = "compliant_docking/config/validate.py"
@@ -1421,9 +1422,9 @@ MUTATIONS = (
     Mutation(
         "L5",
         LEAD,
-        "if not float(limit) > 0.0:",
-        "if not float(limit) >= 0.0:",
-        "a lead limit of 0 m accepted",
+        '    require(QuinticConfig, "trajectory", lead_limit=limit)',
+        "    pass",
+        "the reference's lead limit not checked (0 m or a negative limit accepted)",
         LEAD_TESTS,
     ),
     # ------------------------------------------- the integral's latch and orientation part
@@ -1494,9 +1495,9 @@ MUTATIONS = (
     ),
     Mutation(
         "R1",
-        RUNNER,
-        "EXIT_SUCCESS, EXIT_FAILED, EXIT_GATE = 0, 1, 3",
-        "EXIT_SUCCESS, EXIT_FAILED, EXIT_GATE = 0, 1, 1",
+        EXIT_CODES,
+        "NOT_DOCKED = 3",
+        "NOT_DOCKED = 1",
         "a gate failure exits 1",
         CLI_TESTS,
     ),
