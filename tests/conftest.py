@@ -49,7 +49,15 @@ def pytest_configure(config) -> None:
 #: ``--dist loadgroup`` (pyproject's addopts, with ``-n``) one worker builds it once, instead
 #: of each worker that happens to get one of its tests (xdist keeps a session fixture per worker)
 SESSION_FIXTURES = ("converted", "failing_sweeps")
-MODULE_FIXTURES = ("killed", "finished_sweep", "finished_job", "two_runs", "real_run", "short_run")
+MODULE_FIXTURES = (
+    "killed",
+    "finished_sweep",
+    "finished_job",
+    "two_runs",
+    "real_run",
+    "short_run",
+    "completion_script",
+)
 
 
 @pytest.hookimpl(tryfirst=True)

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.helpers import REPO_ROOT
+from tests.helpers import REPO_ROOT, cli_in_process_output
 
 #: the console script pip installed beside this interpreter ([project.scripts])
 SCRIPT = Path(sys.executable).parent / "compliant-docking"
@@ -31,19 +31,16 @@ def test_console_script_is_installed():
     assert SCRIPT.is_file(), f"{SCRIPT} missing: reinstall the project (pip install -e '.[test]')"
 
 
-def test_console_script_help_is_the_module_help():
+def test_console_script_help_is_the_module_help(capsys):
     script = _run("--help")
-    module = subprocess.run(
-        [sys.executable, "-m", "compliant_docking", "--help"],
-        cwd=REPO_ROOT,
-        capture_output=True,
-        text=True,
-        timeout=120,
-    )
+    # the module's spelling (``python -m compliant_docking``, whose __main__ calls cli.main)
+    # in this process: one process start less, the same main
+    code, module, _ = cli_in_process_output(capsys, "--help")
     assert script.returncode == 0, script.stderr[-2000:]
+    assert code == 0
     assert "Configuration groups" in script.stdout and "controller" in script.stdout
     assert "compliant-docking -m +experiment=tune" in script.stdout
-    assert script.stdout == module.stdout  # one command, two spellings
+    assert script.stdout == module  # one command, two spellings
     # every group on one line with its options, the default first
     for group, options in (
         ("controller", "impedance, hqp, hqp_observer, se3_lie"),
@@ -52,42 +49,40 @@ def test_console_script_help_is_the_module_help():
         ("trajectory", "quintic"),
         ("experiment", "controller_comparison"),
     ):
-        line = next(line for line in module.stdout.splitlines() if line.strip().startswith(group + " "))
+        line = next(line for line in module.splitlines() if line.strip().startswith(group + " "))
         assert options in line, (group, line)
-    assert (
-        "Exit status (the same for every command" in module.stdout
-        and "The composed configuration" in module.stdout
-    )
+    assert "Exit status (the same for every command" in module and "The composed configuration" in module
 
 
-def test_completion_install_script_registers_the_console_script():
-    result = _run("-sc", "install=bash")
+@pytest.fixture(scope="module")
+def completion_script(tmp_path_factory) -> Path:
+    """The install script, written once (as a user's ~/.bashrc line would produce it) by the
+    console script from a directory that is not the checkout: the registration test reads
+    it and the completion test sources it (one process start for both)."""
+    where = tmp_path_factory.mktemp("completion")
+    result = _run("-sc", "install=bash", cwd=where)
     assert result.returncode == 0, result.stderr[-2000:]
-    assert "hydra_bash_completion()" in result.stdout
-    last = result.stdout.strip().splitlines()[-1]
+    (where / "install.sh").write_text(result.stdout)
+    return where / "install.sh"
+
+
+def test_completion_install_script_registers_the_console_script(completion_script):
+    text = completion_script.read_text()
+    assert "hydra_bash_completion()" in text
+    last = text.strip().splitlines()[-1]
     assert last.endswith("-F hydra_bash_completion compliant-docking"), last
 
 
 @pytest.mark.skipif(shutil.which("bash") is None, reason="needs bash")
-def test_bash_completes_groups_options_and_keys(tmp_path):
+def test_bash_completes_groups_options_and_keys(completion_script, tmp_path):
     """Source the install script in bash and complete as the shell would (from another
     directory: the config tree is found from the installed package)."""
     env = {**os.environ, "PATH": os.pathsep.join([str(SCRIPT.parent), os.environ.get("PATH", "")])}
-    # the install script, written once as a user's ~/.bashrc line would produce it
-    install = subprocess.run(
-        ["bash", "-c", "compliant-docking -sc install=bash > install.sh"],
-        cwd=tmp_path,
-        capture_output=True,
-        text=True,
-        timeout=120,
-        env=env,
-    )
-    assert install.returncode == 0, install.stderr[-2000:]
 
     def complete(line: str) -> list[str]:
         words = line.split(" ")
         script = (
-            "source install.sh\n"
+            f"source {completion_script}\n"
             f'COMP_LINE="{line}"; COMP_POINT=${{#COMP_LINE}}\n'
             f"COMP_WORDS=({' '.join(words)}); COMP_CWORD={len(words) - 1}\n"
             'hydra_bash_completion; printf "%s\\n" "${COMPREPLY[@]}"\n'
