@@ -23,15 +23,17 @@ from compliant_docking.run.provenance import config_hash
 from compliant_docking.run.runner import execute
 from compliant_docking.sweep import resume, summary
 from compliant_docking.sweep.session import SweepSession
-from tests.helpers import REPO_ROOT, make_cfg
+from tests.helpers import REPO_ROOT, cli_in_process, make_cfg
 
-#: 6 short free-space jobs (2-4.5 s simulated each, about 2 s of wall time with figures)
+#: 6 short free-space jobs (0.7-1.7 s simulated each): what is judged is which jobs finished
+#: before the kill and what the resume runs again, not what a job simulates; the last two
+#: still take over a second each, so the kill lands while one of them runs
 SWEEP_ARGS = (
     "trajectory=hold",
-    "trajectory.duration=1",
+    "trajectory.duration=0.5",
     "target=none",
     "task.init_pos=[0.55,0,0.35]",
-    "task.settle_time=1,1.5,2,2.5,3,3.5",
+    "task.settle_time=0.2,0.4,0.6,0.8,1,1.2",
     "task.progress=false",
     "hydra.callbacks.sweep.figures=false",
     "hydra.launcher.n_jobs=2",
@@ -253,16 +255,18 @@ def test_half_written_job_directories_are_rerun_not_reported(killed):
         assert len(load_runs(killed.sweep_dir)) == 6
 
 
-def test_a_resume_with_other_overrides_is_refused_and_touches_nothing(killed):
+def test_a_resume_with_other_overrides_is_refused_and_touches_nothing(killed, capsys):
     saved = killed.sweep_dir / "multirun.yaml"
     before = saved.stat().st_mtime_ns, saved.read_bytes()
     other = [
-        a.replace("task.settle_time=1,1.5,", "task.settle_time=1.25,1.5,")
+        a.replace("task.settle_time=0.2,0.4,", "task.settle_time=0.3,0.4,")
         for a in sweep_command(killed.sweep_dir, f"resume={killed.sweep_dir}")
     ]
-    result = subprocess.run(other, cwd=REPO_ROOT, capture_output=True, text=True, timeout=300, env=_env())
-    assert result.returncode == 2  # refused, like every refusal of the command line
-    assert "was started with the overrides" in result.stderr
+    assert other != sweep_command(killed.sweep_dir, f"resume={killed.sweep_dir}")
+    # refused before anything runs: the command's main in this process (no process start)
+    code, err = cli_in_process(capsys, *other[3:])  # without ``python -m compliant_docking``
+    assert code == 2  # refused, like every refusal of the command line
+    assert "was started with the overrides" in err
     assert (saved.stat().st_mtime_ns, saved.read_bytes()) == before
 
 
