@@ -1,6 +1,7 @@
 """The exit status: one table (compliant_docking/exit_codes.py, docs/exit_codes.md, the
 README and ``--help``), the same meaning in every command, each status pinned in-process."""
 
+import json
 import re
 import signal
 
@@ -68,10 +69,13 @@ def test_a_failed_run_exits_1_and_an_undocked_one_3(tmp_path, monkeypatch, capsy
     monkeypatch.chdir(tmp_path)
     code, _ = cli_in_process(capsys, *SHORT, f"hydra.run.dir={tmp_path / 'far'}", "target.pos=[3.0,0.0,0.2]")
     assert code == exit_codes.FAILED
-    assert '"status": "failed"' in (tmp_path / "far" / "metrics.json").read_text()
+    far = json.loads((tmp_path / "far" / "metrics.json").read_text())
+    assert far["status"] == "failed" and "inverse kinematics" in far["error"]
     code, _ = cli_in_process(capsys, *SHORT, f"hydra.run.dir={tmp_path / 'short'}")
     assert code == exit_codes.NOT_DOCKED
-    assert '"success": false' in (tmp_path / "short" / "metrics.json").read_text()
+    short = json.loads((tmp_path / "short" / "metrics.json").read_text())
+    assert short["status"] == "ok" and short["success"] is False
+    assert short["gate_failures"].startswith("not seated: ")
 
 
 @pytest.mark.parametrize(

@@ -307,6 +307,11 @@ def _run_without_joint_friction(out_dir, *overrides):
     return sim, evaluate(sim, out_dir, figures=False)
 
 
+@pytest.mark.slow(
+    reason="two full FR3 dockings; fast: test_docks_the_default_scene_fr3 (hqp docks the FR3, with its "
+    "friction), test_docks_the_default_scene_iiwa14 (no level fails), and test_shaping.py's floor tests "
+    "(the apparent-inertia floor that keeps the seat gentle)"
+)
 def test_fr3_docks_without_joint_friction(tmp_path):
     """The FR3 scene with its joint frictionloss removed (model and feed-forward): hqp docks,
     and so does the impedance controller with the FR3's gains; without friction both reach

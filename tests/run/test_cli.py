@@ -44,6 +44,10 @@ def test_the_default_docking_succeeds_and_writes_the_run_directory(tmp_path):
     assert not list(run_dir.glob(".*.tmp")) and not list(run_dir.glob("*.tmp"))
 
 
+@pytest.mark.slow(
+    reason="in-process proof: tests/test_exit_codes.py::test_a_failed_run_exits_1_and_an_undocked_one_3; "
+    "a process's exit status is main's: test_the_default_docking_succeeds_and_writes_the_run_directory"
+)
 def test_a_docking_gate_failure_exits_3(tmp_path):
     """A run that finishes (status ok) but is never within 1 nm of the seat."""
     run_dir = tmp_path / "run"
@@ -54,6 +58,10 @@ def test_a_docking_gate_failure_exits_3(tmp_path):
     assert record["gate_failures"].startswith("not seated: ")
 
 
+@pytest.mark.slow(
+    reason="in-process proof: tests/test_exit_codes.py::test_a_failed_run_exits_1_and_an_undocked_one_3; "
+    "a process's exit status is main's: test_the_default_docking_succeeds_and_writes_the_run_directory"
+)
 def test_a_runtime_failure_exits_1(tmp_path):
     """A config that passes every check but cannot run (a socket out of the arm's reach):
     status failed, exit 1. A value the checks refuse (a zero stroke) exits 2 before any
