@@ -53,11 +53,10 @@ def wanted(cfg: Any, *, sweep: bool) -> bool:
     return (not sweep) if value is None else bool(value)
 
 
-def marks(cfg: Any, record: dict) -> Any:
-    """What the figures mark (:class:`RunMarks`) from the run's
-    config (plain data or DictConfig) and its metrics record: the force budget and the
-    docking time of a docking run; free space (no target); the segments and thresholds of
-    the tracking test."""
+def marks(cfg: Any, record: dict) -> RunMarks:
+    """What the figures mark (:class:`RunMarks`) from the run's config (plain data or
+    DictConfig) and its metrics record: the force budget and the docking time of a docking
+    run; free space (no target); the segments and thresholds of the tracking test."""
     from compliant_docking.planning.tracking import segment_times
 
     task = cfg.get("task") or {}
@@ -99,7 +98,7 @@ def draw(
     torque_limits: np.ndarray,
     title: str,
     formats: Sequence[str] | None = None,
-    marks: Any = None,
+    marks: RunMarks | None = None,
 ) -> list[Path]:
     """Draw the run's figures into ``job_dir/figures/`` (replacing the folder whole)."""
     files: list[Path] = []
