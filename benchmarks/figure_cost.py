@@ -1,9 +1,9 @@
-"""What a run's figures cost, option by option (the measurement behind viz/plotting.py).
+"""What a run's figures cost, option by option (the measurement behind run/figures.py).
 
     python benchmarks/figure_cost.py [--repeats 5]
 
 Runs the default docking run once (no figures) for its time series, then draws its four
-figures (:func:`compliant_docking.viz.plotting.plot_run`) in a fresh process per try,
+figures (:func:`compliant_docking.run.figures.plot_run`) in a fresh process per try,
 once with the chosen settings and once with each option that was dropped put back, and
 prints the CPU time of the drawing (best of ``--repeats``; CPU time, not wall time, so
 other work on this shared machine matters less) and of importing matplotlib.
@@ -43,16 +43,16 @@ formats, rc, ts_path, out = json.loads(sys.argv[1])
 import numpy as np, pandas as pd
 ts = pd.read_parquet(ts_path)
 start = time.process_time()
-from compliant_docking.viz import plotting
-plt = plotting.apply_style()
+from compliant_docking.run import figures
+plt = figures.apply_style()
 imported = time.process_time()
-style = plotting.apply_style
+style = figures.apply_style
 def apply_style():
     style().rcParams.update(rc)
     return plt
-plotting.apply_style = apply_style
+figures.apply_style = apply_style
 from pathlib import Path
-plotting.plot_run(ts, Path(out), axis=np.array([0.0, 0.0, -1.0]), torque_limits=np.full(7, 100.0),
+figures.plot_run(ts, Path(out), axis=np.array([0.0, 0.0, -1.0]), torque_limits=np.full(7, 100.0),
                   title="iiwa14 · impedance · quintic", formats=formats)
 print(json.dumps([imported - start, time.process_time() - imported]))
 """

@@ -183,7 +183,7 @@ def section_sweep(tmp: Path, jobs: int, repeats: int) -> None:
         f"  CPU time of the sweep {cpu:.2f} s (all processes), its loops ≈ {loops_cpu:.2f} s "
         f"({loops_cpu / cpu:.0%}); cores kept busy: CPU / (2 × wall) = {cpu / (2 * wall):.2f}"
     )
-    from compliant_docking.sweep.summary import summarise
+    from compliant_docking.sweep.outcome import summarise
 
     with contextlib.redirect_stdout(io.StringIO()):  # its console summary
         start = time.perf_counter()

@@ -9,7 +9,7 @@ compliant_docking/run/guard.py, sweep/guard.py), 3 the run finished but its gate
 docked), 130 / 143 / 129 stopped by Ctrl-C / SIGTERM / SIGHUP (a single run records status
 "interrupted" with its time series so far: compliant_docking/run/interrupt.py).
 A sweep (``-m``): 1 if any job failed (or its worker died), else 0 — jobs that did not
-dock are results, counted in the summary (compliant_docking/sweep/summary.py); with
+dock are results, counted in the summary (compliant_docking/sweep/outcome.py); with
 ``hydra.callbacks.sweep.strict=false`` (the tuning presets) 1 only when every job failed;
 130 / 143 / 129 stopped by a signal (the workers are stopped, the summary of what
 finished is written). No traceback is printed for an interruption or a worker process

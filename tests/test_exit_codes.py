@@ -81,7 +81,7 @@ def test_a_failed_run_exits_1_and_an_undocked_one_3(tmp_path, monkeypatch, capsy
 @pytest.mark.parametrize(
     ("module", "argv"),
     [
-        ("compliant_docking.results.report", ["{tmp}/nowhere"]),
+        ("compliant_docking.report", ["{tmp}/nowhere"]),
         ("compliant_docking.results.findings", ["{tmp}/nowhere"]),
         ("compliant_docking.results.convergence", ["{tmp}/nowhere", "--vary", "physics.timestep"]),
         ("compliant_docking.interface", ["--export-keyed", "{tmp}/cad", "--sides", "2"]),

@@ -5,9 +5,14 @@
 - :mod:`.tables`: configurations and their labels, the docking-metrics comparison table, counts;
 - :mod:`.stats`: Wilson and bootstrap intervals, paired tests, Holm's correction;
 - :mod:`.compare`: per-configuration statistics and paired comparisons of a frame;
-- :mod:`.summary`: ``summary.md`` and the summary files;
-- :mod:`.figures`: comparison figures across runs;
-- :mod:`.report`: ``python -m compliant_docking.report PATH``.
+- :mod:`.summary`: ``summary.md`` and the summary files of a set of runs;
+- :mod:`.figures`: the figures comparing runs, one module per what they show (the metrics'
+  bars, success against the drawn errors, the contact force, the peg-in-hole curves);
+- :mod:`.findings`, :mod:`.convergence`, :mod:`.peg_in_hole`, :mod:`.jamming_map`: the
+  analyses with a command of their own.
+
+The command that writes the summary files and the figures of any runs is
+``python -m compliant_docking.report PATH`` (:mod:`compliant_docking.report`).
 """
 
 from compliant_docking.results.compare import configuration_stats, paired_comparisons

@@ -26,8 +26,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-import compliant_docking.results.plots as plots
 from compliant_docking.evaluation.map_boundaries import MapBoundaries
+from compliant_docking.results.figures import common
 from compliant_docking.results.load import load_runs
 from compliant_docking.results.stats import wilson
 
@@ -107,7 +107,7 @@ def jamming_map_figure(cells: pd.DataFrame, bounds: MapBoundaries, out_dir: str 
                        stem: str = "jamming_map", title: str = "jamming map"):  # fmt: skip
     """The cells' success rates (colour, docked/jobs written in each) per robot (rows) and
     controller (columns), with the theory's boundaries drawn over them."""
-    plt = plots.comparison_style()
+    plt = common.comparison_style()
     rows = list(dict.fromkeys(cells["robot"]))
     cols = list(dict.fromkeys(cells["controller"]))
     x_edges = np.unique(np.r_[cells["x_low_mm"], cells["x_high_mm"]])
@@ -139,7 +139,7 @@ def jamming_map_figure(cells: pd.DataFrame, bounds: MapBoundaries, out_dir: str 
                 j = int(np.searchsorted(t_edges, cell.tilt_low_deg))
                 rate[j, i] = cell.success_rate
                 ax.text((cell.x_low_mm + cell.x_high_mm) / 2, (cell.tilt_low_deg + cell.tilt_high_deg) / 2,
-                        f"{cell.docked}/{cell.jobs}", ha="center", va="center", fontsize=plots.FONT - 1.5,
+                        f"{cell.docked}/{cell.jobs}", ha="center", va="center", fontsize=common.FONT - 1.5,
                         color="0.15")  # fmt: skip
             ax.pcolormesh(
                 x_edges, t_edges, rate, cmap="RdYlGn", vmin=0.0, vmax=1.0, alpha=0.55, shading="flat"
@@ -167,9 +167,9 @@ def jamming_map_figure(cells: pd.DataFrame, bounds: MapBoundaries, out_dir: str 
             handles.setdefault(label, handle)
     fig.legend(list(handles.values()), list(handles), loc="lower center", ncols=2,
                bbox_to_anchor=(0.5, (below - 0.25) / height))  # fmt: skip
-    plots.note(fig, lines)
+    common.note(fig, lines)
     fig.suptitle(title)
-    plots.save_figure(fig, out_dir, stem)
+    common.save_figure(fig, out_dir, stem)
     return fig
 
 

@@ -48,7 +48,7 @@ from compliant_docking.evaluation.insertion_statics import (
     insertion_curve,
 )
 from compliant_docking.evaluation.peg_in_hole import PegInHole, crossing_force_ratio
-from compliant_docking.results.peg_in_hole_figures import draw
+from compliant_docking.results.figures.peg_in_hole import draw
 from compliant_docking.sim.compliance_rig import (
     Push,
     Ramp,

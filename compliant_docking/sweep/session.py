@@ -5,7 +5,7 @@ Hydra's run; Hydra instantiates the sweep callback from the config, and the call
 finds the session through :func:`SweepSession.current` (a context variable: the session
 exists exactly while the command runs, and a test can open its own). The session
 records what the sweep is (directory, job count, launcher, start time, the submitit
-progress watcher) and, at the end, its :class:`~compliant_docking.sweep.summary.SweepOutcome`;
+progress watcher) and, at the end, its :class:`~compliant_docking.sweep.outcome.SweepOutcome`;
 the command line reads the outcome for its exit status, or summarises an aborted sweep.
 """
 
@@ -19,8 +19,8 @@ from contextvars import ContextVar
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from compliant_docking.sweep.outcome import SweepOutcome, summarise
 from compliant_docking.sweep.progress import ProgressWatcher, remove_count, reset_count
-from compliant_docking.sweep.summary import SweepOutcome, summarise
 
 _CURRENT: ContextVar[SweepSession | None] = ContextVar("compliant_docking_sweep", default=None)
 
@@ -82,7 +82,7 @@ class SweepSession:
 
                 if figures:
                     from compliant_docking.results import figures as _  # noqa: F401
-                    from compliant_docking.viz.plotting import apply_style
+                    from compliant_docking.viz.style import apply_style
 
                     apply_style()  # matplotlib and the style
             except Exception:  # the summary imports them itself and reports what fails

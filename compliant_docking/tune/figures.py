@@ -4,7 +4,7 @@
   along the top edge, and the best value so far (one panel per objective value);
 - :func:`plot_pareto`: two objectives against each other, the Pareto front joined.
 
-Each is saved as PNG and PDF in the style of the run figures (viz/plotting.py).
+Each is saved as PNG and PDF in the style of every figure (viz/style.py).
 """
 
 from __future__ import annotations
@@ -15,23 +15,16 @@ import numpy as np
 import pandas as pd
 
 from compliant_docking.tune.objectives import Objective
+from compliant_docking.viz.style import apply_style, save
 
 HISTORY, PARETO = "optimisation_history", "pareto_front"
 LABELS = {"force_N": "force [N]", "time_s": "docking time [s]"}
-
-
-def _save(fig, out_dir: Path, stem: str) -> list[Path]:
-    out_dir.mkdir(parents=True, exist_ok=True)
-    paths = [out_dir / f"{stem}.png", out_dir / f"{stem}.pdf"]
-    for path in paths:
-        fig.savefig(path)
-    return paths
+#: a study's figures are few and go into papers: PDF beside the PNG
+FORMATS = ("png", "pdf")
 
 
 def plot_history(frame: pd.DataFrame, objective: Objective, out_dir: Path, metric: str = "") -> list[Path]:
     """The optimisation history (see the module docstring); the files written."""
-    from compliant_docking.viz.plotting import apply_style
-
     plt = apply_style()
     told = frame[frame[objective.value_names[0]].notna()] if len(frame) else frame
     names = objective.value_names
@@ -60,7 +53,7 @@ def plot_history(frame: pd.DataFrame, objective: Objective, out_dir: Path, metri
     axes[-1, 0].set_xlabel("trial")
     fig.suptitle(f"Optimisation history: {objective.name} (values over the draws)", fontsize=9)
     fig.tight_layout()
-    paths = _save(fig, Path(out_dir), HISTORY)
+    paths = save(fig, Path(out_dir), HISTORY, FORMATS)
     plt.close(fig)
     return paths
 
@@ -69,8 +62,6 @@ def plot_pareto(frame: pd.DataFrame, objective: Objective, out_dir: Path, metric
     """The Pareto front of a two-value objective (nothing for one value)."""
     if len(objective.value_names) != 2 or not len(frame):
         return []
-    from compliant_docking.viz.plotting import apply_style
-
     plt = apply_style()
     x, y = objective.value_names
     good = frame[frame["feasible"].astype(bool) & frame[x].notna()]
@@ -103,6 +94,6 @@ def plot_pareto(frame: pd.DataFrame, objective: Objective, out_dir: Path, metric
     if len(good):
         ax.legend(fontsize=7)
     fig.tight_layout()
-    paths = _save(fig, Path(out_dir), PARETO)
+    paths = save(fig, Path(out_dir), PARETO, FORMATS)
     plt.close(fig)
     return paths

@@ -289,7 +289,7 @@ class TuningSweeper(Sweeper):
     @staticmethod
     def _record_orphans(trials: list, n_draws: int, sweep_dir: Path) -> None:
         from compliant_docking.run.rundir import METRICS_FILE
-        from compliant_docking.sweep.summary import record_orphan
+        from compliant_docking.sweep.outcome import record_orphan
 
         for trial in trials:
             for i in range(n_draws):

@@ -70,14 +70,14 @@ def test_a_long_note_is_shrunk_to_the_figures_width():
     """Before: the overlay of 40 runs wrote its note 6 px past a 4.5 in figure's edge."""
     import matplotlib.pyplot as plt
 
-    from compliant_docking.results import plots
+    from compliant_docking.results.figures import common
 
     fig = plt.figure(figsize=(2.9, 2.0))
-    plots.note(
+    common.note(
         fig, ["40 runs of 8 configurations (5–5 each); median and 10–90 % band; " * 2, "pooled over: x"]
     )
     try:
-        assert outside(fig) == [] and fig.texts[0].get_fontsize() < plots.FONT - 1.5
+        assert outside(fig) == [] and fig.texts[0].get_fontsize() < common.FONT - 1.5
     finally:
         plt.close(fig)
 
@@ -128,7 +128,7 @@ def drawn(monkeypatch):
     from compliant_docking.tune import figures
 
     kept: dict = {}
-    monkeypatch.setattr(figures, "_save", lambda fig, out_dir, stem: kept.update({stem: fig}) or [])
+    monkeypatch.setattr(figures, "save", lambda fig, out_dir, stem, formats: kept.update({stem: fig}) or [])
     monkeypatch.setattr("matplotlib.pyplot.close", lambda fig=None: None)
     return kept
 

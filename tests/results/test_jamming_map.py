@@ -58,7 +58,7 @@ def test_the_figure_draws_the_theory_where_it_says(bounds, monkeypatch):
     """The chamfer's lines pass through ±2.13 mm upright; the two-point line at 1.72°; the
     funnel mouth (±10.8 mm) and wedging (11.7°) lie outside these axes and are not drawn,
     until the map reaches the mouth (+10.79 mm upright)."""
-    monkeypatch.setattr("compliant_docking.results.plots.save_figure", lambda *a, **k: [])
+    monkeypatch.setattr("compliant_docking.results.figures.common.save_figure", lambda *a, **k: [])
     df = jobs()
     df.loc[len(df)] = df.loc[0].copy()
     df.loc[len(df) - 1, ["task.misalignment.x_range", "task.misalignment.tilt_deg_range"]] = [

@@ -11,6 +11,7 @@ import pandas as pd
 import pytest
 from omegaconf import OmegaConf
 
+from compliant_docking import report
 from compliant_docking.results import (
     BASE_COLUMNS,
     RunSkippedWarning,
@@ -20,7 +21,6 @@ from compliant_docking.results import (
     configuration_labels,
     counts,
     load_runs,
-    report,
     scan,
     write_summary,
 )

@@ -12,7 +12,7 @@ import pandas as pd
 import pytest
 
 from compliant_docking.results import peg_in_hole as pih
-from compliant_docking.results.peg_in_hole_figures import draw
+from compliant_docking.results.figures.peg_in_hole import draw
 from tests.helpers import REPO_ROOT
 
 #: over every case (measured: 0.90 %, lateral 6 mm): |crossing ratio sim / theory − 1|

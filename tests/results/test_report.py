@@ -9,7 +9,7 @@ import sys
 
 import pytest
 
-from compliant_docking.results.report import main as report
+from compliant_docking.report import main as report
 from compliant_docking.run.runner import execute
 from tests.helpers import REPO_ROOT, make_cfg
 
@@ -56,7 +56,7 @@ def test_report_on_a_directory_it_cannot_write_suggests_out(two_runs, tmp_path, 
     assert report([str(two_runs), "--out", "/proc/report", "--no-figures"]) == 2
     assert "report: cannot write into /proc/report" in capsys.readouterr().err
     # a directory that refuses writes (what a read-only sweep gives a non-root user)
-    from compliant_docking.results import report as module
+    from compliant_docking import report as module
 
     def refuse(*args, **kwargs):
         raise PermissionError(13, "Permission denied")

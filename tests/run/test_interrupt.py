@@ -264,7 +264,7 @@ def test_concurrent_writers_of_one_file_never_collide(tmp_path):
 @pytest.mark.parametrize(
     ("command", "patched", "signum"),
     [
-        ("report", "compliant_docking.results.report.scan", signal.SIGTERM),
+        ("report", "compliant_docking.report.scan", signal.SIGTERM),
         ("findings", "compliant_docking.results.findings.load_runs", signal.SIGINT),
         ("interface", "compliant_docking.interface.convert", signal.SIGHUP),
     ],
@@ -283,7 +283,7 @@ def test_the_other_commands_stop_on_a_signal_in_one_line(
 
     monkeypatch.setattr(patched, signalled)
     main = importlib.import_module(
-        {"report": "compliant_docking.results.report", "findings": "compliant_docking.results.findings",
+        {"report": "compliant_docking.report", "findings": "compliant_docking.results.findings",
          "interface": "compliant_docking.interface"}[command]
     ).main  # fmt: skip
     cad = REPO_ROOT / "assets" / "interfaces" / "keyed_cad" / "cad"

@@ -17,9 +17,9 @@ from omegaconf import OmegaConf
 from compliant_docking import CONF_DIR
 from compliant_docking.config import register_schemas
 from compliant_docking.sweep.callback import expected_jobs
+from compliant_docking.sweep.outcome import ORPHAN_ERROR, SweepOutcome
 from compliant_docking.sweep.progress import COUNT_FILE, job_line, next_count, remove_count, reset_count
 from compliant_docking.sweep.session import SweepSession
-from compliant_docking.sweep.summary import ORPHAN_ERROR, SweepOutcome
 from tests.helpers import SHORT_SWEEP as SHORT
 from tests.helpers import TESTS, sweep_cli
 

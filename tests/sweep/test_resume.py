@@ -21,7 +21,8 @@ from omegaconf import OmegaConf
 from compliant_docking.results import RunSkippedWarning, load_runs
 from compliant_docking.run.provenance import config_hash
 from compliant_docking.run.runner import execute
-from compliant_docking.sweep import resume, summary
+from compliant_docking.sweep import outcome as sweep_outcome
+from compliant_docking.sweep import resume
 from compliant_docking.sweep.session import SweepSession
 from tests.helpers import REPO_ROOT, cli_in_process, make_cfg
 
@@ -197,7 +198,7 @@ def test_an_interrupted_sweep_leaves_nothing_that_reads_as_a_result(killed):
             assert _started(record) < killed.killed_at
         else:  # the launching process's record of a job it lost
             assert record["status"] == "failed" and record["interrupted"] is True
-            assert record["error"] == summary.ORPHAN_ERROR and record["error"].startswith("interrupted")
+            assert record["error"] == sweep_outcome.ORPHAN_ERROR and record["error"].startswith("interrupted")
     if killed.signum == signal.SIGTERM:  # unwound like Ctrl-C: records, summary, exit 143
         assert killed.kill_returncode in (143, 1)  # 1: a worker's death was seen first
         assert all(killed.after_kill[name] is not None for name in unfinished)
@@ -393,8 +394,8 @@ def test_orphan_records_are_marked_and_never_replace_a_result(tmp_path):
     for job in (lost, done):
         (job / ".hydra").mkdir(parents=True)
     (done / "metrics.json").write_text('{"status": "ok"}')
-    summary.record_orphan(lost)
-    summary.record_orphan(done)  # its result arrived meanwhile: kept
+    sweep_outcome.record_orphan(lost)
+    sweep_outcome.record_orphan(done)  # its result arrived meanwhile: kept
     record = json.loads((lost / "metrics.json").read_text())
     assert record["status"] == "failed" and record["interrupted"] is True
     assert record["error"].startswith("interrupted")

@@ -9,8 +9,8 @@ import pandas as pd
 import pytest
 
 from compliant_docking.planning.tracking import segment_times
-from compliant_docking.viz import plotting
-from compliant_docking.viz.plotting import RunMarks, plot_run
+from compliant_docking.run import figures as run_figures
+from compliant_docking.run.figures import RunMarks, plot_run
 
 
 def series(contact_at: float | None = 10.0, peak: float = 30.0, duration: float = 12.0) -> pd.DataFrame:
@@ -46,12 +46,12 @@ def drawn(monkeypatch):
     """{stem: figure} of everything plot_run saves (the figures stay open to inspect)."""
     figures = {}
 
-    def save(fig, out_dir, stem, formats=plotting.FORMATS):
+    def save(fig, out_dir, stem, formats=run_figures.FORMATS):
         fig.canvas.draw()  # tick labels and offset texts exist only once drawn
         figures[stem] = fig
         return []
 
-    monkeypatch.setattr(plotting, "save", save)
+    monkeypatch.setattr(run_figures, "save", save)
     import matplotlib.pyplot as plt
 
     close = plt.close
@@ -133,4 +133,4 @@ def test_the_first_contact_mark_is_the_metrics_first_contact_time(first_row):
         "first_contact_time_s"
     ]
     expected = None if first_row is None else ts["t"].iloc[max(first_row - 1, 0)]
-    assert plotting.first_contact_time(ts) == metric == expected
+    assert run_figures.first_contact_time(ts) == metric == expected

@@ -12,8 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
-import compliant_docking.results.plots as plots  # the module, not the package (no import cycle)
 from compliant_docking.evaluation.insertion_statics import TWO_POINT, WEDGED, InsertionCurve
+from compliant_docking.results.figures import common
 
 #: forces below this [N] are drawn on a linear scale, above it logarithmically (a panel whose
 #: forces stay below ten times this is linear throughout)
@@ -24,7 +24,7 @@ COLUMNS = 3
 def draw(panels: Sequence, out_dir: Path) -> list[Path]:
     """One figure per group of ``panels``: (case, the binned run, its quasi-static
     extrapolation, the theory's curve) tuples.  Returns the files written."""
-    plt = plots.comparison_style()
+    plt = common.comparison_style()
     groups: dict[str, list] = {}
     for panel in panels:
         groups.setdefault(panel[0].group, []).append(panel)
@@ -42,7 +42,7 @@ def draw(panels: Sequence, out_dir: Path) -> list[Path]:
         fig.legend(handles, labels, loc="upper center", ncol=3, frameon=False)
         fig.supxlabel("tip depth below the bore's lip [mm]")
         fig.tight_layout(rect=(0, 0, 1, 1 - 0.55 / height))
-        written += plots.save_figure(
+        written += common.save_figure(
             fig, out_dir, f"peg_in_hole_{group.replace(' + ', '_').replace(' ', '_')}"
         )
         plt.close(fig)
@@ -70,7 +70,7 @@ def _panel(ax, case, base, qs, curve: InsertionCurve) -> None:
             0.9,
             " wedged (theory)",
             color="C3",
-            fontsize=plots.FONT - 1.5,
+            fontsize=common.FONT - 1.5,
             transform=ax.get_xaxis_transform(),
         )
     peak = np.nanmax(np.abs(np.concatenate([base["F_z"], base["F_x"]])))

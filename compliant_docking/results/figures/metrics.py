@@ -1,60 +1,19 @@
-"""Figures comparing runs (the run figures' style, PNG; PDF on request), from a :func:`load_runs` frame.
-
-- :func:`metric_bars`: grouped bars of the docking metrics and the success rate across
-  configurations (mean over repeats, whiskers: the bootstrap 95 % interval of the mean,
-  Wilson's for the success rate);
-- :func:`success_vs_misalignment`, :func:`success_map` (:mod:`.success_figures`): success
-  against the drawn socket misalignment, binned with Wilson intervals, and the 2-D map
-  over lateral × tilt error per controller;
-- :func:`force_overlay` (:mod:`.force_figures`): the axial contact force of every run
-  aligned on its first contact, faceted robot × controller;
-- :func:`plot_comparison`: those that have something to show into one folder (what
-  the sweep callback and ``python -m compliant_docking.report`` call).
-
-No figure drops a configuration silently: what a figure pools or leaves out is written on it.
-
-Every function returns the matplotlib Figure (for a notebook: ``display(fig)``) and,
-given ``out_dir``, also saves it as ``<stem>.png`` (other formats: ``formats``, e.g.
-``("png", "pdf")``; a PDF costs about as much as the PNG).
-"""
+"""Grouped bars of the docking metrics and the success rate across configurations
+(:func:`metric_bars`, ``comparison/table10_bars.png``): the Table-10 comparison as a figure."""
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import pandas as pd
 from matplotlib.ticker import MaxNLocator
 
 from compliant_docking.evaluation import registry
-from compliant_docking.results.force_figures import force_overlay
-from compliant_docking.results.plots import comparison_style, note, save_figure
+from compliant_docking.results.figures.common import comparison_style, note, save_figure
 from compliant_docking.results.stats import bootstrap_ci, wilson
-from compliant_docking.results.success_figures import (
-    MISALIGNMENT_AXES,
-    misalignment_components,
-    success_map,
-    success_vs_error,
-    success_vs_misalignment,
-)
 from compliant_docking.results.tables import NOT_MEASURED, configuration_keys, configuration_labels
-from compliant_docking.viz.plotting import FORMATS
-
-__all__ = [
-    "BAR_SECTIONS",
-    "MISALIGNMENT_AXES",
-    "force_overlay",
-    "metric_bars",
-    "misalignment_components",
-    "plot_comparison",
-    "save_figure",
-    "success_map",
-    "success_vs_error",
-    "success_vs_misalignment",
-]
 
 #: metrics drawn by :func:`metric_bars`, by section of the registry (plus success)
 BAR_SECTIONS = (registry.CONTACT, registry.CONTACT_EVENTS, registry.INTERNAL, registry.TRACKING)
@@ -166,32 +125,3 @@ def metric_bars(df: pd.DataFrame, out_dir: str | Path | None = None, stem: str =
                "(bootstrap of the mean; Wilson for the success rate)" if len(jobs) else ""])  # fmt: skip
     save_figure(fig, out_dir, stem)
     return fig
-
-
-def plot_comparison(df: pd.DataFrame, out_dir: str | Path, formats: Sequence[str] = FORMATS) -> list[Path]:
-    """All comparison figures of ``df`` into ``out_dir`` (PNG, or ``formats``); returns the files.
-
-    The bars only when there are configurations to compare (:func:`configuration_keys`:
-    repeats of one configuration are one bar per panel, which the table says better);
-    the success against the misalignment only when the misalignment varies, its 2-D map
-    only when both the lateral and the tilt error vary; the force overlay when some run
-    touched the socket.
-    """
-    plt = comparison_style()
-    out = Path(out_dir)
-    saved: list[Path] = []
-    makers: list[tuple[Callable[[pd.DataFrame], Any], str]] = [
-        (success_vs_misalignment, "success_vs_misalignment"),
-        (success_vs_error, "success_vs_error"),
-        (success_map, "success_map"),
-        (force_overlay, "force_overlay"),
-    ]
-    if configuration_keys(df):
-        makers.insert(0, (metric_bars, "table10_bars"))
-    for make, stem in makers:
-        fig = make(df)
-        if fig is None:
-            continue
-        saved += save_figure(fig, out, stem, formats)
-        plt.close(fig)
-    return saved

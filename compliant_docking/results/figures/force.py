@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-import compliant_docking.results.plots as plots  # the module, not the package (no import cycle)
+from compliant_docking.results.figures import common
 from compliant_docking.results.load import RunSkippedWarning
 from compliant_docking.results.tables import FAILED_STATUSES, configuration_labels
 from compliant_docking.run import rundir
@@ -91,8 +91,8 @@ def force_overlay(
     chosen = chosen[~chosen["status"].isin(FAILED_STATUSES)] if len(chosen) else chosen
     if chosen.empty:
         return None
-    row, rows, col, cols, rest = plots.facets(df)
-    labels = plots.series_labels(df, rest).reindex(chosen.index)
+    row, rows, col, cols, rest = common.facets(df)
+    labels = common.series_labels(df, rest).reindex(chosen.index)
     traces: dict[int, tuple[np.ndarray, np.ndarray]] = {}
     missing: list[str] = []
     for index, job in chosen.iterrows():
@@ -103,23 +103,23 @@ def force_overlay(
             traces[index] = trace
     if not traces:
         return None
-    plt = plots.comparison_style()
+    plt = common.comparison_style()
     width = 1.9 * len(cols) + 0.7
     height = 1.45 * len(rows) + 1.1
     fig, axes = plt.subplots(len(rows), len(cols), figsize=(width, height), squeeze=False, sharex=True)
     fig.subplots_adjust(left=0.55 / width, right=1 - 0.1 / width, bottom=0.9 / height, top=1 - 0.42 / height,
                         wspace=0.3, hspace=0.35)  # fmt: skip
-    palette = plots.colors(plt)
+    palette = common.colors(plt)
     order = list(dict.fromkeys(labels))
     color_of = {label: palette[i % len(palette)] for i, label in enumerate(order)}
     grid = np.arange(window[0], window[1] + GRID_STEP / 2, GRID_STEP)
-    budget = plots.budget_of(chosen)
+    budget = common.budget_of(chosen)
     banded = False
     for r, row_value in enumerate(rows):
         for c, col_value in enumerate(cols):
             ax = axes[r][c]
-            here = [i for i in traces if plots.select(chosen, row, row_value, col, col_value)[i]]
-            ax.set_title(plots.facet_title(row, row_value, col, col_value))
+            here = [i for i in traces if common.select(chosen, row, row_value, col, col_value)[i]]
+            ax.set_title(common.facet_title(row, row_value, col, col_value))
             drawn_max = 0.0
             for label in order:
                 mine = [i for i in here if labels[i] == label]
@@ -145,7 +145,7 @@ def force_overlay(
                 ax.axhline(budget, color="C3", lw=0.8, ls="--")
             elif budget is not None and here:
                 ax.annotate(f"budget {budget:g} N: above", (0.98, 0.95), xycoords="axes fraction", ha="right",
-                            va="top", color="C3", fontsize=plots.FONT - 1)  # fmt: skip
+                            va="top", color="C3", fontsize=common.FONT - 1)  # fmt: skip
             if r == len(rows) - 1:
                 ax.set_xlabel("time since first contact [s]")
             if c == 0:
@@ -172,7 +172,7 @@ def force_overlay(
     if missing:
         shown = ", ".join(missing[:4]) + (f" and {len(missing) - 4} more" if len(missing) > 4 else "")
         notes.append(f"not shown, no readable time series or no contact: {len(missing)} runs ({shown})")
-    plots.note(fig, notes)
+    common.note(fig, notes)
     fig.suptitle("axial contact force (pressing +), aligned on the first contact")
-    plots.save_figure(fig, out_dir, stem)
+    common.save_figure(fig, out_dir, stem)
     return fig

@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-import compliant_docking.results.plots as plots  # the module, not the package (no import cycle)
+from compliant_docking.results.figures import common
 from compliant_docking.results.stats import wilson
 from compliant_docking.results.tables import configuration_keys
 
@@ -152,7 +152,7 @@ def success_vs_error(df: pd.DataFrame, out_dir: str | Path | None = None, stem: 
 def _success_against(df, components, title: str, out_dir, stem: str):
     """The success-rate and force panels against each component (key, label, scale, neutral):
     x = |value − neutral| × scale."""
-    plt = plots.comparison_style()
+    plt = common.comparison_style()
     series_key, series, pooled = _series(df)
     force_key = "first_strike_force_N" if "first_strike_force_N" in df else "peak_axial_force_N"
     force_label = "first-strike force [N]" if force_key == "first_strike_force_N" else "peak axial force [N]"
@@ -161,7 +161,7 @@ def _success_against(df, components, title: str, out_dir, stem: str):
     fig, axes = plt.subplots(2, len(components), figsize=(width, height), squeeze=False, sharex="col")
     fig.subplots_adjust(left=0.55 / width, right=1 - 0.1 / width, bottom=0.95 / height, top=1 - 0.35 / height,
                         wspace=0.3, hspace=0.12)  # fmt: skip
-    palette = plots.colors(plt)
+    palette = common.colors(plt)
     docked_all = (df["success"] == True).to_numpy()  # noqa: E712
     force_all = (
         pd.to_numeric(df[force_key], errors="coerce").to_numpy()
@@ -202,12 +202,12 @@ def _success_against(df, components, title: str, out_dir, stem: str):
     if series_key:
         fig.legend(*axes[0][0].get_legend_handles_labels(), loc="lower center", ncols=min(len(series), 4),
                    bbox_to_anchor=(0.5, 0.2 / height))  # fmt: skip
-    budget = plots.budget_of(df)
+    budget = common.budget_of(df)
     if budget is not None:
         for ax in axes[1]:
             if budget <= 3 * max(np.nanmax(force_all, initial=0.0), 1e-9):
                 ax.axhline(budget, color="C3", lw=0.7, ls="--")
-    plots.note(
+    common.note(
         fig,
         [
             f"{len(df)} jobs; bins of the drawn error, whiskers: Wilson 95 % interval of the success rate; "
@@ -216,7 +216,7 @@ def _success_against(df, components, title: str, out_dir, stem: str):
         ],
     )
     fig.suptitle(title)
-    plots.save_figure(fig, out_dir, stem)
+    common.save_figure(fig, out_dir, stem)
     return fig
 
 
@@ -226,8 +226,8 @@ def success_map(df: pd.DataFrame, out_dir: str | Path | None = None, stem: str =
     names = [k for k, _, _ in misalignment_components(df)]
     if "misalignment_lateral_m" not in names or "misalignment_tilt_deg" not in names:
         return None
-    plt = plots.comparison_style()
-    row, rows, col, cols, rest = plots.facets(df)
+    plt = common.comparison_style()
+    row, rows, col, cols, rest = common.facets(df)
     lateral = pd.to_numeric(df["misalignment_lateral_m"], errors="coerce").to_numpy() * 1e3
     tilt = pd.to_numeric(df["misalignment_tilt_deg"], errors="coerce").abs().to_numpy()
     x_edges = _grid(lateral[np.isfinite(lateral)], max_bins=6)
@@ -246,7 +246,7 @@ def success_map(df: pd.DataFrame, out_dir: str | Path | None = None, stem: str =
         for c, col_value in enumerate(cols):
             ax = axes[r][c]
             mask = (
-                plots.select(df, row, row_value, col, col_value).to_numpy()
+                common.select(df, row, row_value, col, col_value).to_numpy()
                 & np.isfinite(lateral)
                 & np.isfinite(tilt)
             )
@@ -260,7 +260,7 @@ def success_map(df: pd.DataFrame, out_dir: str | Path | None = None, stem: str =
                         rate[j, i] = docked[mask][sel].mean()
                         ax.text((x_edges[i] + x_edges[i + 1]) / 2, (y_edges[j] + y_edges[j + 1]) / 2,
                                 f"{int(docked[mask][sel].sum())}/{int(sel.sum())}", ha="center", va="center",
-                                fontsize=plots.FONT - 1.5, color="0.15")  # fmt: skip
+                                fontsize=common.FONT - 1.5, color="0.15")  # fmt: skip
             ax.pcolormesh(x_edges, y_edges, rate, cmap=cmap, vmin=0.0, vmax=1.0, alpha=0.45, shading="flat")
             for name, (marker, face) in OUTCOMES.items():
                 sel = ends[mask] == name
@@ -275,7 +275,7 @@ def success_map(df: pd.DataFrame, out_dir: str | Path | None = None, stem: str =
                 ax.scatter(
                     lateral[mask][sel], tilt[mask][sel], s=10, marker=marker, lw=0.5, label=name, **style
                 )
-            ax.set_title(plots.facet_title(row, row_value, col, col_value) or "all runs")
+            ax.set_title(common.facet_title(row, row_value, col, col_value) or "all runs")
             if r == len(rows) - 1:
                 ax.set_xlabel("lateral error [mm]")
             if c == 0:
@@ -289,7 +289,7 @@ def success_map(df: pd.DataFrame, out_dir: str | Path | None = None, stem: str =
             handles.setdefault(label, handle)
     fig.legend(list(handles.values()), list(handles), loc="lower center", ncols=min(len(handles), 3),
                bbox_to_anchor=(0.5, 0.2 / height))  # fmt: skip
-    plots.note(
+    common.note(
         fig,
         [
             f"{len(df)} draws; cells: docked/jobs, colour = success rate (red 0, green 1)",
@@ -297,5 +297,5 @@ def success_map(df: pd.DataFrame, out_dir: str | Path | None = None, stem: str =
         ],
     )
     fig.suptitle("success over lateral × tilt error (jamming/wedging map)")
-    plots.save_figure(fig, out_dir, stem)
+    common.save_figure(fig, out_dir, stem)
     return fig

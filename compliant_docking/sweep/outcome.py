@@ -1,6 +1,8 @@
-"""The end of a sweep: the summary files, the console counts and the outcome.
+"""The end of a sweep, and what it ended with: the outcome (counts, exit status), printed.
 
-:func:`summarise` loads the sweep with :func:`compliant_docking.results.scan`, writes
+The files it leaves are written by the results layer (:mod:`compliant_docking.results.summary`,
+:mod:`compliant_docking.results.figures`), as ``python -m compliant_docking.report`` writes
+them for any runs. :func:`summarise` loads the sweep with :func:`compliant_docking.results.scan`, writes
 ``summary.{parquet,csv,md}``, ``comparison.{csv,parquet}`` and ``paired.{csv,parquet}`` (and
 the comparison figures under ``comparison/``), prints how many jobs finished, docked and
 failed, and returns the

@@ -11,7 +11,7 @@ import numpy as np
 import pandas as pd
 
 from compliant_docking.results.tables import configuration_keys, configuration_labels
-from compliant_docking.viz.plotting import FORMATS, apply_style, save
+from compliant_docking.viz.style import FORMATS, apply_style, save
 
 #: one font size for labels, ticks and legends of the comparison figures [pt]
 FONT = 7.0
