@@ -11,8 +11,15 @@ import pytest
 import yaml
 
 from compliant_docking import CONF_DIR
-from compliant_docking.sim.misalignment import draw
-from tests.helpers import make_cfg
+from compliant_docking.sim.misalignment import Misalignment
+from compliant_docking.sim.misalignment import draw as draw_settings
+from compliant_docking.sim.settings import sim_settings
+from tests.helpers import make_cfg, misalignment
+
+
+def draw(given: dict) -> Misalignment:
+    """The draw of ``task.misalignment`` set to ``given``."""
+    return draw_settings(misalignment(**given))
 
 
 def preset(name: str) -> tuple[dict, dict]:
@@ -68,7 +75,7 @@ def test_every_controller_robot_and_planner_docks_into_the_same_sockets():
                 f"trajectory={trajectory}",
                 f"task.misalignment.seed={seed}",
             )
-            poses.add(draw(cfg.task.misalignment))
+            poses.add(draw_settings(sim_settings(cfg).task.misalignment))
         assert len(poses) == 1, poses
         [pose] = poses
         assert pose == draw({**preset("controller_comparison")[1], "seed": seed})
