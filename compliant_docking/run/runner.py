@@ -140,9 +140,8 @@ def execute(
         if sim is not None:
             steps = sim.telemetry.count
             record["sim_time_s"] = steps * sim.scene.model.opt.timestep
-            record.update(
-                model_error.record_for(sim.settings, sim.scene.arm.tool.mass)
-            )  # + believed − true mass
+            # the model error's keys again, with the believed − true tool mass
+            record.update(model_error.record_for(sim.settings, sim.scene.arm.tool.mass))
             record["steps"] = steps
             record["real_time_factor"] = (
                 record["sim_time_s"] / sim.loop_wall_time if sim.loop_wall_time > 0 else None
