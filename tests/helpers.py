@@ -3,6 +3,7 @@ a push on the tool."""
 
 from __future__ import annotations
 
+import functools
 import os
 import subprocess
 import sys
@@ -18,6 +19,21 @@ REPO_ROOT = Path(__file__).resolve().parents[1]
 
 #: the composed config for some overrides, exactly as the CLI would build it
 make_cfg = load_config
+
+
+def misalignment(**given):
+    """``task.misalignment`` as the simulation gets it (the schema's ``MisalignmentConfig``):
+    the default config's (nothing misaligned) with the settings ``given``."""
+    from dataclasses import replace
+
+    return replace(_default_settings().task.misalignment, **given)
+
+
+@functools.cache
+def _default_settings():
+    from compliant_docking.sim.settings import sim_settings
+
+    return sim_settings(make_cfg())
 
 
 # the arm held still in free space at a reachable point (no socket): push and hold tests

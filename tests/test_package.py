@@ -62,10 +62,11 @@ def test_a_relative_path_is_the_working_directorys_first_then_the_packaged_asset
 def test_a_missing_fragment_names_every_place_looked_in(tmp_path, monkeypatch):
     from compliant_docking.config import load_config
     from compliant_docking.sim.scene import build_scene
+    from compliant_docking.sim.settings import sim_settings
 
     monkeypatch.chdir(tmp_path)
     with pytest.raises(ValueError) as err:
-        build_scene(load_config("tool.mjcf=assets/interfaces/nothing/tool.xml"))
+        build_scene(sim_settings(load_config("tool.mjcf=assets/interfaces/nothing/tool.xml")))
     message = str(err.value)
     assert "tool.mjcf: no such file 'assets/interfaces/nothing/tool.xml'" in message
     assert str(tmp_path / "assets/interfaces/nothing/tool.xml") in message

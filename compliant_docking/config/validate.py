@@ -257,8 +257,11 @@ def _relations(cfg: DictConfig) -> list[str]:
         if isinstance(quat, list) and len(quat) == 4 and (problem := quaternion_problem(key, quat)):
             found.append(problem)
     has_target = _get(cfg, "target.name") not in (None, "none")
-    found += start_problems(cfg, has_target)
-    press = press_problem(cfg, has_target)
+    found += start_problems(_get(cfg, "task.stroke"), _get(cfg, "task.init_pos"), has_target)
+    overshoot, pressing, settle = (
+        _get(cfg, f"task.{k}") for k in ("insertion_overshoot", "press_duration", "settle_time")
+    )
+    press = press_problem(overshoot, pressing, settle, has_target)
     found += [press] if press else []
     found += misalignment_problems(_get(cfg, "task.misalignment"), has_target)
     found += robustness.problems(cfg)  # sensor, model_error, dynamics
@@ -282,13 +285,12 @@ def torque_margin_problem(max_torque: list[float], eps_abs: float) -> str | None
     )
 
 
-def start_problems(cfg: DictConfig, has_target: bool) -> list[str]:
+def start_problems(stroke: Any, init_pos: Any, has_target: bool) -> list[str]:
     """Why the task's start and goal cannot be placed: a zero ``task.stroke`` with a socket,
     no ``task.init_pos`` without one (the config check and sim/task.py ask)."""
-    stroke = _get(cfg, "task.stroke")
     if has_target and isinstance(stroke, list) and not any(stroke):
         return [f"task.stroke must be a non-zero vector (start → seat) [m]; got {show(stroke)}."]
-    if not has_target and _get(cfg, "task.init_pos") is None:
+    if not has_target and init_pos is None:
         return [
             "task.init_pos must be set when there is no target (target=none): the start pose "
             "cannot be derived from a socket; got null."
@@ -305,12 +307,10 @@ def quaternion_problem(key: str, quat: list[float]) -> str | None:
     return f"{key} must be a unit quaternion [w, x, y, z] (norm 1 within {UNIT_TOLERANCE:g}); got {show(quat)}{norm}."
 
 
-def press_problem(cfg: DictConfig, has_target: bool) -> str | None:
-    """Why the press past the seat does not fit in the settle time, or None (the config
-    check and the planner's construction, compliant_docking/sim/simulate.py, both ask)."""
-    overshoot, press, settle = (
-        _get(cfg, f"task.{k}") for k in ("insertion_overshoot", "press_duration", "settle_time")
-    )
+def press_problem(overshoot: Any, press: Any, settle: Any, has_target: bool) -> str | None:
+    """Why the press of ``task.insertion_overshoot`` over ``task.press_duration`` does not fit
+    in ``task.settle_time``, or None (the config check and the planner's construction,
+    compliant_docking/sim/simulate.py, both ask)."""
     if has_target and overshoot and press is not None and settle is not None and press > settle:
         return (
             f"task.press_duration must be at most task.settle_time = {settle:g} s (the press of "

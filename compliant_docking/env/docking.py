@@ -119,8 +119,9 @@ class DockingEnv(gym.Env):
             )
         nv = len(cfg.robot.max_torque)
         from compliant_docking.sim.scene import socket_pose
+        from compliant_docking.sim.settings import sim_settings
 
-        believed = socket_pose(cfg).believed  # type: ignore[union-attr]  # target is a socket
+        believed = socket_pose(sim_settings(cfg)).believed  # type: ignore[union-attr]  # target is a socket
         self.action_mode = make_action(
             settings.action,
             nv=nv,

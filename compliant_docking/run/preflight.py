@@ -66,6 +66,7 @@ def _run_duration(cfg: DictConfig) -> float | str:
 
     from omegaconf import OmegaConf
 
+    from compliant_docking.sim.settings import sim_settings
     from compliant_docking.sim.simulate import plan
     from compliant_docking.sim.task import hold_extension, nominal_waypoints, run_duration
 
@@ -85,8 +86,9 @@ def _run_duration(cfg: DictConfig) -> float | str:
     )
     if key not in _PLANNED:
         try:
-            planner = plan(cfg, nominal_waypoints(cfg))
-            _PLANNED[key] = run_duration(cfg, planner)[0] + hold_extension(cfg, planner)
+            settings = sim_settings(cfg)
+            planner = plan(cfg.trajectory, settings.task, nominal_waypoints(settings))
+            _PLANNED[key] = run_duration(settings.task, planner)[0] + hold_extension(settings.task, planner)
         except ValueError as exc:
             _PLANNED[key] = _sentence(exc)
     return _PLANNED[key]

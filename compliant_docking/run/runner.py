@@ -78,6 +78,7 @@ def execute(
     """
     from compliant_docking.config.validate import validate
     from compliant_docking.sim import mjlog
+    from compliant_docking.sim.settings import sim_settings
     from compliant_docking.sim.simulate import Diverged, prepare
 
     if figures is None:
@@ -92,9 +93,15 @@ def execute(
         record["overrides"] = " ".join(episode.overrides) or None
     record.update(dict.fromkeys(DOCKING_KEYS))
     record.update(dict.fromkeys(CONTACT_KEYS), gate_verdict=None)
-    record.update(misalignment_record(cfg))  # true vs believed socket pose (flat keys)
+    try:  # the simulation's typed settings, made once for the records and the simulation
+        settings = sim_settings(cfg)
+    except Exception:
+        settings = None  # null records; the run fails below with the reason
+    record.update(misalignment_record(settings))  # true vs believed socket pose (flat keys)
     # what the controller does not know: its model, its sensors; the plant's contact draw
-    record.update(model_error.record_for(cfg), **sensor.record_for(cfg), **dynamics.record_for(cfg))
+    record.update(
+        model_error.record_for(settings), **sensor.record_for(settings), **dynamics.record_for(settings)
+    )
     sim = None
     interrupted: KeyboardInterrupt | None = None
     with mjlog.captured() as mujoco_warnings:  # never MUJOCO_LOG.TXT in the working directory
@@ -109,7 +116,7 @@ def execute(
 
                 show.check_allowed()
             if episode is None:
-                sim = prepare(cfg)
+                sim = prepare(cfg, settings)
                 sim.run(
                     progress=bool(cfg.task.progress) and echo,
                     on_step=show.RealTimeViewer(sim) if show else None,
@@ -133,7 +140,8 @@ def execute(
         if sim is not None:
             steps = sim.telemetry.count
             record["sim_time_s"] = steps * sim.scene.model.opt.timestep
-            record.update(model_error.record_for(cfg, sim.scene.arm.tool.mass))  # + believed − true mass
+            # the model error's keys again, with the believed − true tool mass
+            record.update(model_error.record_for(sim.settings, sim.scene.arm.tool.mass))
             record["steps"] = steps
             record["real_time_factor"] = (
                 record["sim_time_s"] / sim.loop_wall_time if sim.loop_wall_time > 0 else None

@@ -3,5 +3,7 @@ MjSpec), the parametric interface geometry, the Pinocchio arm model, the F/T sen
 task's poses, the misalignment of the true socket, the loop and its telemetry.
 
 Heavy objects (MjModel, Pinocchio model) are built inside a job by
-:func:`compliant_docking.sim.simulate.prepare`, never at import time.
+:func:`compliant_docking.sim.simulate.prepare`, never at import time. It reads the run's
+config once, as typed settings (:mod:`compliant_docking.sim.settings`); the modules below
+it take those, never the config.
 """

@@ -19,11 +19,16 @@ that file and docs/robustness.md.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import mujoco
 import numpy as np
 
+from compliant_docking.config.robustness import DynamicsConfig
 from compliant_docking.sim.misalignment import uniform_draw
+
+if TYPE_CHECKING:
+    from compliant_docking.sim.settings import SimSettings
 
 #: the drawn quantities, in the order of their random streams (300 + index)
 QUANTITIES = ("friction", "timeconst", "dampratio", "width")
@@ -73,22 +78,25 @@ class ContactDraw:
         return len(geoms)
 
 
-def draw(settings) -> ContactDraw:
-    """The contact draw of ``settings`` (the ``dynamics`` node; None: nominal)."""
+def draw(settings: DynamicsConfig | None) -> ContactDraw:
+    """The contact draw of ``settings`` (the ``dynamics`` group, typed; None: nominal)."""
     if settings is None:
         return ContactDraw()
-    seed = int(settings.get("seed", 0) or 0)
+    seed = int(settings.seed or 0)
     values: dict = {}
     for index, name in enumerate(QUANTITIES):
-        bounds = settings.get(f"{name}_range")
+        bounds = getattr(settings, f"{name}_range")
         if bounds is not None:
             values[name] = uniform_draw(seed, 300 + index, float(bounds[0]), float(bounds[1]))
     return ContactDraw(**values, seed=seed if values else None)
 
 
-def record_for(cfg) -> dict:
-    """The contact keys of metrics.json for ``cfg`` (never raises: null when invalid)."""
+def record_for(settings: SimSettings | None) -> dict:
+    """The contact keys of metrics.json for the run's ``settings`` (never raises: null when
+    invalid; None: the config's nodes are not the schema's)."""
+    if settings is None:
+        return dict.fromkeys(RECORD_KEYS)
     try:
-        return draw(cfg.get("dynamics")).record()
+        return draw(settings.dynamics).record()
     except Exception:
         return dict.fromkeys(RECORD_KEYS)

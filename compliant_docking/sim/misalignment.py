@@ -28,8 +28,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from compliant_docking.config.schemas import MisalignmentConfig
+    from compliant_docking.sim.settings import SimSettings
 
 #: the components, in the order of their random streams
 COMPONENTS = ("x", "y", "yaw_deg", "tilt_deg")
@@ -106,8 +111,8 @@ def empty_record() -> dict:
     return dict.fromkeys(RECORD_KEYS)
 
 
-def draw(settings) -> Misalignment:
-    """The misalignment of ``settings`` (``task.misalignment``: a DictConfig or a dict).
+def draw(settings: MisalignmentConfig | None) -> Misalignment:
+    """The misalignment of ``settings`` (``task.misalignment``, typed: :mod:`compliant_docking.sim.settings`).
 
     Fixed components pass through; a component with a ``<name>_range`` is drawn
     uniformly from it with the stream ``SeedSequence([seed, index of the component])``.
@@ -120,13 +125,12 @@ def draw(settings) -> Misalignment:
     from compliant_docking.config.schemas import MisalignmentConfig
     from compliant_docking.config.validate import misalignment_problems
 
-    keys = (*COMPONENTS, *(f"{name}_range" for name in COMPONENTS), "seed")
-    given = {k: _plain(settings.get(k)) for k in keys if settings.get(k) is not None}
+    given = {k: v for k, v in vars(settings).items() if v is not None}
     require(MisalignmentConfig, "task.misalignment", **given)
-    found = misalignment_problems(settings, has_target=True)
+    found = misalignment_problems(vars(settings), has_target=True)
     if found:
         raise ValueError(" ".join(found))
-    seed = settings.get("seed", 0)
+    seed = settings.seed
     values: dict[str, float] = {}
     drawn = False
     for index, name in enumerate(COMPONENTS):
@@ -143,21 +147,15 @@ def draw(settings) -> Misalignment:
     return Misalignment(**values, seed=int(seed) if drawn else None)
 
 
-def _plain(value):
-    """A setting as a Python number or list (a DictConfig's list node is not a list)."""
-    return list(value) if hasattr(value, "__len__") and not isinstance(value, str) else value
+def record_for(settings: SimSettings | None) -> dict:
+    """The misalignment keys of metrics.json for the run's ``settings`` (never raises).
 
-
-def record_for(cfg) -> dict:
-    """The misalignment keys of metrics.json for the config ``cfg`` (never raises).
-
-    Null without a socket, or when the settings are invalid (the run then fails with
-    the reason when its scene is built).
+    Null without a socket, or when the settings are invalid (None: the config's nodes are
+    not the schema's; the run then fails with the reason when its scene is built).
     """
-    target = cfg.get("target")
-    if target is None or target.get("name") == "none":
+    if settings is None or settings.socket is None:
         return empty_record()
     try:
-        return draw(cfg.task.get("misalignment")).record()
+        return draw(settings.task.misalignment).record()
     except (ValueError, TypeError):
         return empty_record()

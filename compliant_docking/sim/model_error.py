@@ -21,11 +21,16 @@ same errors to every controller (common random numbers).
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from compliant_docking.config.robustness import MODEL_ERROR_SCALARS
+from compliant_docking.config.robustness import MODEL_ERROR_SCALARS, ModelErrorConfig
 from compliant_docking.sim.misalignment import uniform_draw
+
+if TYPE_CHECKING:
+    from compliant_docking.sim.scene import Scene
+    from compliant_docking.sim.settings import SimSettings
 
 #: the scalar quantities, in the order of their random streams (100 + index)
 SCALARS = tuple(name for name, _ in MODEL_ERROR_SCALARS)
@@ -98,31 +103,31 @@ class ModelError:
         return out
 
 
-def draw(settings) -> ModelError:
-    """The model error of ``settings`` (the ``model_error`` node; None: exact). Fixed values
-    pass through; a quantity with a ``*_range`` is drawn uniformly from it."""
+def draw(settings: ModelErrorConfig | None) -> ModelError:
+    """The model error of ``settings`` (the ``model_error`` group, typed; None: exact). Fixed
+    values pass through; a quantity with a ``*_range`` is drawn uniformly from it."""
     if settings is None:
         return ModelError()
-    seed = int(settings.get("seed", 0) or 0)
+    seed = int(settings.seed or 0)
     values: dict = {}
     drawn = False
     for index, name in enumerate(SCALARS):
-        bounds = settings.get(f"{name}_range")
+        bounds = getattr(settings, f"{name}_range")
         if bounds is None:
-            values[name] = float(settings.get(name, 1.0))
+            values[name] = float(getattr(settings, name))
         else:
             values[name] = uniform_draw(seed, 100 + index, float(bounds[0]), float(bounds[1]))
             drawn = True
-    bounds = settings.get("tool_com_offset_m_range")
+    bounds = settings.tool_com_offset_m_range
     if bounds is None:
-        com = tuple(float(c) for c in settings.get("tool_com_offset_m", (0.0, 0.0, 0.0)))
+        com = tuple(float(c) for c in settings.tool_com_offset_m)
     else:
         com = tuple(uniform_draw(seed, s, float(bounds[0]), float(bounds[1])) for s in COM_STREAMS)
         drawn = True
     return ModelError(**values, tool_com_offset=com, seed=seed if drawn else None)  # type: ignore[arg-type]
 
 
-def believed_arm(cfg, scene, error: ModelError):
+def believed_arm(settings: SimSettings, scene: Scene, error: ModelError):
     """The controller's Pinocchio arm (``ArmModel``) for ``error``; None when it is the plant's."""
     if not error.inertia_changed:
         return None
@@ -130,18 +135,21 @@ def believed_arm(cfg, scene, error: ModelError):
     from compliant_docking.sim.models import ArmModel, mount_placement
 
     return ArmModel(
-        resolve_path(cfg.robot.mjcf),
-        cfg.robot.ee_site,
-        mount_placement(cfg.tool.mount_pos, cfg.tool.mount_quat, "tool.mount_quat"),
+        resolve_path(settings.robot.mjcf),
+        settings.robot.ee_site,
+        mount_placement(settings.tool.mount_pos, settings.tool.mount_quat, "tool.mount_quat"),
         error.believed_tool(scene.arm.tool),
         scene.gravity,
         adjust=error.adjust_links,
     )
 
 
-def record_for(cfg, tool_mass: float | None = None) -> dict:
-    """The model-error keys of metrics.json for ``cfg`` (never raises: null when invalid)."""
+def record_for(settings: SimSettings | None, tool_mass: float | None = None) -> dict:
+    """The model-error keys of metrics.json for the run's ``settings`` (never raises: null
+    when invalid; None: the config's nodes are not the schema's)."""
+    if settings is None:
+        return dict.fromkeys(RECORD_KEYS)
     try:
-        return draw(cfg.get("model_error")).record(tool_mass)
+        return draw(settings.model_error).record(tool_mass)
     except Exception:
         return dict.fromkeys(RECORD_KEYS)

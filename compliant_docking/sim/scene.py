@@ -28,11 +28,11 @@ from typing import Any
 import mujoco
 import numpy as np
 import pinocchio as pin
-from omegaconf import DictConfig, OmegaConf
 
 from compliant_docking import looked_in, resolve_path
-from compliant_docking.config.geometry import PlugGeometry, SocketGeometry, check_fit
+from compliant_docking.config.geometry import ContactParams, PlugGeometry, SocketGeometry, check_fit
 from compliant_docking.config.keyed import KeyedPlugGeometry, KeyedSocketGeometry, check_keyed_fit
+from compliant_docking.config.schemas import PhysicsConfig, TargetConfig, ToolConfig
 from compliant_docking.config.validate import misalignment_problems
 from compliant_docking.sim.dynamics import draw as contact_draw
 from compliant_docking.sim.geometry import build_plug, build_socket
@@ -40,6 +40,7 @@ from compliant_docking.sim.geometry.fragment import Key, read_key
 from compliant_docking.sim.geometry.keyed import build_keyed_plug, build_keyed_socket
 from compliant_docking.sim.misalignment import Misalignment, draw
 from compliant_docking.sim.models import ArmModel, RigidTool, mount_placement
+from compliant_docking.sim.settings import SimSettings
 
 CAMERA = "track_cam"
 
@@ -97,7 +98,9 @@ _PAIRS: dict[tuple[type, type], Callable[[Any, Any], None]] = {
 }
 
 
-def _load_fragment(kind: str, node: DictConfig, contact: DictConfig | None) -> tuple[mujoco.MjSpec, str, Key]:
+def _load_fragment(
+    kind: str, node: ToolConfig | TargetConfig, contact: ContactParams | None
+) -> tuple[mujoco.MjSpec, str, Key]:
     """The fragment's spec, a description of its source and its key: from ``node.mjcf``
     if set, else generated from its geometry.
 
@@ -105,22 +108,28 @@ def _load_fragment(kind: str, node: DictConfig, contact: DictConfig | None) -> t
     None in free space, where the plug's geoms keep MuJoCo's defaults).
     """
     if node.mjcf:
-        path = resolve_path(node.mjcf)
-        if not path.is_file():
-            raise ValueError(f"{kind}.mjcf: no such file {node.mjcf!r} (looked for {looked_in(node.mjcf)})")
-        try:
-            spec = mujoco.MjSpec.from_file(str(path))
-        except Exception as exc:  # MuJoCo parse errors
-            raise _fragment_error(kind, str(path), f"MuJoCo cannot parse it ({exc})") from None
-        source = str(path)
+        return _fragment_file(kind, node.mjcf)
+    if isinstance(node, TargetConfig):
+        spec = _PARAMETRIC_TARGETS[type(node.geometry)][1](node.geometry, node.contact)
     else:
-        geom = OmegaConf.to_object(node.geometry)
-        if kind == "tool":
-            params = None if contact is None else OmegaConf.to_object(contact)
-            spec = _PARAMETRIC_TOOLS[type(geom)][1](geom, params)
-        else:
-            spec = _PARAMETRIC_TARGETS[type(geom)][1](geom, OmegaConf.to_object(node.contact))
-        source = f"{kind}={node.name} (parametric)"
+        spec = _PARAMETRIC_TOOLS[type(node.geometry)][1](node.geometry, contact)
+    return _checked(kind, spec, f"{kind}={node.name} (parametric)")
+
+
+def _fragment_file(kind: str, mjcf: str) -> tuple[mujoco.MjSpec, str, Key]:
+    """The spec, source and key of the fragment file ``mjcf``."""
+    path = resolve_path(mjcf)
+    if not path.is_file():
+        raise ValueError(f"{kind}.mjcf: no such file {mjcf!r} (looked for {looked_in(mjcf)})")
+    try:
+        spec = mujoco.MjSpec.from_file(str(path))
+    except Exception as exc:  # MuJoCo parse errors
+        raise _fragment_error(kind, str(path), f"MuJoCo cannot parse it ({exc})") from None
+    return _checked(kind, spec, str(path))
+
+
+def _checked(kind: str, spec: mujoco.MjSpec, source: str) -> tuple[mujoco.MjSpec, str, Key]:
+    """The fragment's spec, source and key, once it has what a ``kind`` fragment must have."""
     if spec.body("dock") is None:
         raise _fragment_error(kind, source, "no body named 'dock'")
     if kind == "tool" and spec.site("sensor_site") is None:
@@ -133,28 +142,26 @@ def fragment_file_problem(kind: str, mjcf: str) -> str | None:
     or None: the checks :func:`build_scene` makes when it loads it, for the checks before a
     run (compliant_docking/run/preflight.py)."""
     try:
-        _load_fragment(kind, OmegaConf.create({"mjcf": mjcf}), None)
+        _fragment_file(kind, mjcf)
     except ValueError as exc:
         return str(exc)
     return None
 
 
-def _check_pair(cfg: DictConfig) -> None:
+def _check_pair(tool: ToolConfig, target: TargetConfig) -> None:
     """Two parametric parts must be a pair that fits (a fragment file is the user's call)."""
-    if cfg.tool.mjcf or cfg.target.mjcf:
+    if tool.mjcf or target.mjcf:
         return
-    tool_type = OmegaConf.get_type(cfg.tool, "geometry")
-    target_type = OmegaConf.get_type(cfg.target, "geometry")
-    check = _PAIRS.get((tool_type, target_type))  # type: ignore[arg-type]  # get_type: type | None
+    check = _PAIRS.get((type(tool.geometry), type(target.geometry)))
     if check is None:
         pairs = ", ".join(
             f"tool={_PARAMETRIC_TOOLS[a][0]} target={_PARAMETRIC_TARGETS[b][0]}" for a, b in _PAIRS
         )
         raise ValueError(
-            f"tool={cfg.tool.name} and target={cfg.target.name} are not a mating pair: use "
+            f"tool={tool.name} and target={target.name} are not a mating pair: use "
             f"{pairs}, or a fragment file via tool.mjcf / target.mjcf (docs/interfaces.md)"
         )
-    check(OmegaConf.to_object(cfg.tool.geometry), OmegaConf.to_object(cfg.target.geometry))
+    check(tool.geometry, target.geometry)
 
 
 def rigid_tool(spec: mujoco.MjSpec, source: str) -> RigidTool:
@@ -188,20 +195,21 @@ def rigid_tool(spec: mujoco.MjSpec, source: str) -> RigidTool:
     return RigidTool(mass=mass, com=com, inertia=inertia, tcp=site_se3("tcp"), sensor=site_se3("sensor_site"))
 
 
-def socket_pose(cfg: DictConfig) -> SocketPose | None:
+def socket_pose(settings: SimSettings) -> SocketPose | None:
     """The socket's nominal (believed) and physical (true) seat pose in the world.
 
     believed = ``target.pos``/``target.quat``; true = believed · the misalignment of
     ``task.misalignment`` (fixed or drawn with its seed; compliant_docking/sim/misalignment.py).
     """
-    settings = cfg.task.get("misalignment")
-    offset = draw(settings)
-    if cfg.target.name == "none":
-        needs_socket = misalignment_problems(settings, has_target=False)  # the config check's rule
+    misaligned = settings.task.misalignment
+    offset = draw(misaligned)
+    target = settings.socket
+    if target is None:
+        needs_socket = misalignment_problems(vars(misaligned), has_target=False)  # the config check's rule
         if needs_socket:
             raise ValueError(" ".join(needs_socket))
         return None
-    nominal = mount_placement(cfg.target.pos, cfg.target.quat, "target.quat")
+    nominal = mount_placement(target.pos, target.quat, "target.quat")
     return SocketPose(true=offset.apply(nominal), believed=nominal, misalignment=offset)
 
 
@@ -255,7 +263,7 @@ def _add_glue(spec: mujoco.MjSpec, tool_prefix: str, socket: SocketPose | None) 
         )
 
 
-def _set_physics(spec: mujoco.MjSpec, physics: DictConfig) -> None:
+def _set_physics(spec: mujoco.MjSpec, physics: PhysicsConfig) -> None:
     opt = spec.option
     opt.timestep = float(physics.timestep)
     opt.gravity = [float(g) for g in physics.gravity]
@@ -269,46 +277,45 @@ def _set_physics(spec: mujoco.MjSpec, physics: DictConfig) -> None:
         opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_MIDPHASE)
 
 
-def build_scene(cfg: DictConfig) -> Scene:
-    """Assemble and compile the scene of ``cfg`` and build the matching Pinocchio arm."""
-    robot_path = resolve_path(cfg.robot.mjcf)
+def build_scene(settings: SimSettings) -> Scene:
+    """Assemble and compile the scene of ``settings`` and build the matching Pinocchio arm."""
+    robot, plug, target, physics = settings.robot, settings.tool, settings.socket, settings.physics
+    robot_path = resolve_path(robot.mjcf)
     if not robot_path.is_file():
-        raise ValueError(
-            f"robot.mjcf: no such file {cfg.robot.mjcf!r} (looked for {looked_in(cfg.robot.mjcf)})"
-        )
+        raise ValueError(f"robot.mjcf: no such file {robot.mjcf!r} (looked for {looked_in(robot.mjcf)})")
     arm_spec = mujoco.MjSpec.from_file(str(robot_path))
-    ee_site = arm_spec.site(cfg.robot.ee_site)
+    ee_site = arm_spec.site(robot.ee_site)
     if ee_site is None:
-        raise ValueError(f"robot.ee_site {cfg.robot.ee_site!r} is not a site of {robot_path}")
+        raise ValueError(f"robot.ee_site {robot.ee_site!r} is not a site of {robot_path}")
 
     # Tool: its mass properties first (from a standalone copy), then attach it posed
     # relative to the flange site: attach interprets the body pose in the site frame.
-    contact = cfg.target.get("contact")  # the pair's contact parameters; None in free space
-    tool_spec, source, key = _load_fragment("tool", cfg.tool, contact)
+    contact = None if target is None else target.contact  # the pair's contact parameters
+    tool_spec, source, key = _load_fragment("tool", plug, contact)
     tool = rigid_tool(tool_spec, source)
-    tool_spec, _, _ = _load_fragment("tool", cfg.tool, contact)
-    mount = mount_placement(cfg.tool.mount_pos, cfg.tool.mount_quat, "tool.mount_quat")
+    tool_spec, _, _ = _load_fragment("tool", plug, contact)
+    mount = mount_placement(plug.mount_pos, plug.mount_quat, "tool.mount_quat")
     tool_root = tool_spec.body("dock")
     tool_root.pos = mount.translation.tolist()
     tool_root.quat = pin.Quaternion(mount.rotation).coeffs()[[3, 0, 1, 2]].tolist()
-    ee_site.attach_body(tool_root, prefix=cfg.tool.prefix)
-    tcp_name = f"{cfg.tool.prefix}tcp"
+    ee_site.attach_body(tool_root, prefix=plug.prefix)
+    tcp_name = f"{plug.prefix}tcp"
     if arm_spec.site(tcp_name) is None:  # fragment without a tcp site: the dock origin
-        arm_spec.body(f"{cfg.tool.prefix}dock").add_site(name=tcp_name)
+        arm_spec.body(f"{plug.prefix}dock").add_site(name=tcp_name)
 
-    socket = socket_pose(cfg)
-    if socket is not None:
-        _check_pair(cfg)
-        target_spec, _, target_key = _load_fragment("target", cfg.target, contact)
+    socket = socket_pose(settings)
+    if socket is not None and target is not None:
+        _check_pair(plug, target)
+        target_spec, _, target_key = _load_fragment("target", target, contact)
         key = key.combine(target_key)
         quat = pin.Quaternion(socket.true.rotation).coeffs()[[3, 0, 1, 2]]
         frame = arm_spec.worldbody.add_frame(
             name="target_frame", pos=socket.true.translation.tolist(), quat=quat.tolist()
         )
-        frame.attach_body(target_spec.body("dock"), prefix=cfg.target.prefix)
+        frame.attach_body(target_spec.body("dock"), prefix=target.prefix)
 
-    _add_glue(arm_spec, cfg.tool.prefix, socket)
-    sensor_site = f"{cfg.tool.prefix}sensor_site"
+    _add_glue(arm_spec, plug.prefix, socket)
+    sensor_site = f"{plug.prefix}sensor_site"
     arm_spec.add_sensor(
         name="force_sensor",
         type=mujoco.mjtSensor.mjSENS_FORCE,
@@ -321,11 +328,11 @@ def build_scene(cfg: DictConfig) -> Scene:
         objtype=mujoco.mjtObj.mjOBJ_SITE,
         objname=sensor_site,
     )
-    _set_physics(arm_spec, cfg.physics)
+    _set_physics(arm_spec, physics)
     model = arm_spec.compile()
-    if socket is not None:  # the plant's contact drawn per seed (dynamics=randomised)
-        contact_draw(cfg.get("dynamics")).apply(
-            model, [model.body(f"{cfg.tool.prefix}dock").id, model.body(f"{cfg.target.prefix}dock").id]
+    if target is not None:  # the plant's contact drawn per seed (dynamics=randomised)
+        contact_draw(settings.dynamics).apply(
+            model, [model.body(f"{plug.prefix}dock").id, model.body(f"{target.prefix}dock").id]
         )
 
     if model.sensor("torque_sensor").adr[0] != model.sensor("force_sensor").adr[0] + 3:
@@ -335,14 +342,14 @@ def build_scene(cfg: DictConfig) -> Scene:
             f"robot.mjcf {robot_path}: expected one motor per joint, found "
             f"{model.nu} actuators for {model.nv} joints"
         )
-    gravity = np.asarray(cfg.physics.gravity, dtype=float)
-    arm = ArmModel(robot_path, cfg.robot.ee_site, mount, tool, gravity)
+    gravity = np.asarray(physics.gravity, dtype=float)
+    arm = ArmModel(robot_path, robot.ee_site, mount, tool, gravity)
     return Scene(
         model=model,
         arm=arm,
         socket=socket,
         force_adr=int(model.sensor("force_sensor").adr[0]),
-        tool_body=model.body(f"{cfg.tool.prefix}dock").id,
+        tool_body=model.body(f"{plug.prefix}dock").id,
         sensor_site=model.site(sensor_site).id,
         tcp_site=model.site(tcp_name).id,
         gravity=gravity,

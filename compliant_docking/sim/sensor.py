@@ -32,10 +32,11 @@ import mujoco
 import numpy as np
 import pinocchio as pin
 
-from compliant_docking.config.robustness import sample_period
+from compliant_docking.config.robustness import SensorConfig, sample_period
 from compliant_docking.sim.misalignment import stream_rng
 from compliant_docking.sim.models import ArmModel, RigidTool
 from compliant_docking.sim.scene import Scene
+from compliant_docking.sim.settings import SimSettings
 
 #: column names of the controller's F/T reading in the time series (non-ideal sensors)
 SENSED_COLUMNS = ("sensed_fx", "sensed_fy", "sensed_fz", "sensed_mx", "sensed_my", "sensed_mz")
@@ -116,21 +117,21 @@ class SensorModel:
         return self.exact_wrench and self.q_noise == 0.0 and self.v_noise == 0.0
 
     @classmethod
-    def from_settings(cls, settings, dt: float) -> SensorModel:
-        """The model of ``settings`` (the ``sensor`` node) at time step ``dt`` [s]; the bias
+    def from_settings(cls, settings: SensorConfig, dt: float) -> SensorModel:
+        """The model of ``settings`` (the ``sensor`` group, typed) at time step ``dt`` [s]; the bias
         drawn with the seed. Raises ValueError naming the setting for values the loop
         cannot realise (the config check refuses them first)."""
-        rate, cutoff = settings.get("rate_hz"), settings.get("cutoff_hz")
+        rate, cutoff = settings.rate_hz, settings.cutoff_hz
         period = 1 if rate is None else sample_period(float(rate), dt)
         if period is None:
             raise ValueError(
                 f"sensor.rate_hz must make the sample period a whole number of steps of {dt:g} s; got {rate}"
             )
-        delay = int(round(float(settings.get("delay_s", 0.0)) / dt))
+        delay = int(round(float(settings.delay_s) / dt))
         alpha = None if cutoff is None else 1.0 - math.exp(-2.0 * math.pi * float(cutoff) * dt)
         noise = np.array([*settings.force_noise_N, *settings.moment_noise_Nm], dtype=float)
         bias = np.array([*settings.force_bias_N, *settings.moment_bias_Nm], dtype=float)
-        seed = int(settings.get("seed", 0))
+        seed = int(settings.seed)
         spread = np.repeat([float(settings.force_bias_std_N), float(settings.moment_bias_std_Nm)], 3)
         if np.any(spread):
             bias = bias + spread * stream_rng(seed, STREAM_BIAS).standard_normal(6)
@@ -251,19 +252,25 @@ class Sensing:
         return {name: self.wrench.record[:count, i] for i, name in enumerate(SENSED_COLUMNS)}
 
 
-def sensing(cfg, dt: float, n_steps: int, nv: int, believed_tool: RigidTool | None) -> Sensing | None:
-    """The controller's sensors for ``cfg`` (the ``sensor`` group); None when the reading is
-    exact and the believed tool is the plant's (the ideal loop, bit for bit)."""
-    model = SensorModel.from_settings(cfg.sensor, dt) if cfg.get("sensor") is not None else SensorModel()
+def sensing(
+    settings: SensorConfig | None, dt: float, n_steps: int, nv: int, believed_tool: RigidTool | None
+) -> Sensing | None:
+    """The controller's sensors for ``settings`` (the ``sensor`` group, typed; None: ideal);
+    None when the reading is exact and the believed tool is the plant's (the ideal loop, bit
+    for bit)."""
+    model = SensorModel.from_settings(settings, dt) if settings is not None else SensorModel()
     if model.ideal and believed_tool is None:
         return None
     return Sensing(model, n_steps, nv, believed_tool)
 
 
-def record_for(cfg, dt: float | None = None) -> dict:
-    """The sensor keys of metrics.json for ``cfg`` (never raises: null when invalid)."""
+def record_for(settings: SimSettings | None, dt: float | None = None) -> dict:
+    """The sensor keys of metrics.json for the run's ``settings`` (never raises: null when
+    invalid; None: the config's nodes are not the schema's)."""
+    if settings is None or settings.sensor is None:
+        return dict.fromkeys(SensorModel().record())
     try:
-        step = float(cfg.physics.timestep) if dt is None else dt
-        return SensorModel.from_settings(cfg.sensor, step).record()
+        step = float(settings.physics.timestep) if dt is None else dt
+        return SensorModel.from_settings(settings.sensor, step).record()
     except Exception:
         return dict.fromkeys(SensorModel().record())

@@ -40,6 +40,7 @@ from compliant_docking.sim.models import ArmModel
 from compliant_docking.sim.progress import RunProgress
 from compliant_docking.sim.scene import Scene, build_scene
 from compliant_docking.sim.sensor import Sensing, sensing, wrench_reader
+from compliant_docking.sim.settings import SimSettings, sim_settings
 from compliant_docking.sim.task import hold_extension, run_duration, task_waypoints
 from compliant_docking.sim.telemetry import Telemetry
 
@@ -57,7 +58,8 @@ class Diverged(RuntimeError):
 
 @dataclass
 class Simulation:
-    cfg: DictConfig
+    cfg: DictConfig  # the run's composed config (its records and metrics read it)
+    settings: SimSettings  # what the simulation reads of it, typed
     scene: Scene
     data: mujoco.MjData
     q0: np.ndarray
@@ -108,7 +110,7 @@ class Simulation:
     def extension_capped(self) -> bool:
         """Whether the reference was held longer than ``task.max_hold`` extends the run (a
         fixed ``task.duration`` is never extended, so never capped)."""
-        if self.lead is None or self.cfg.task.duration is not None:
+        if self.lead is None or self.settings.task.duration is not None:
             return False
         return self.planned_steps + self.lead.held_steps > self.n_steps
 
@@ -255,63 +257,73 @@ def _divergence_reason(t: float, qvel: np.ndarray, tau: np.ndarray, bad_qacc: in
     return f"simulation diverged at t = {t:.3f} s: {what}"
 
 
-def plan(cfg: DictConfig, waypoints: Waypoints) -> Planner:
-    """The planner of ``cfg`` (the `trajectory` config group) for ``waypoints``, followed by
-    the press home when the task presses (:class:`PressHome`); raises ValueError for a
-    planner that cannot serve the task."""
+def plan(trajectory: DictConfig, task: TaskConfig, waypoints: Waypoints) -> Planner:
+    """The planner of ``trajectory`` (the `trajectory` config group's node) for ``waypoints``,
+    followed by the press home when the ``task`` presses (:class:`PressHome`); raises
+    ValueError for a planner that cannot serve the task."""
     # _partial_: the config's parameters are bound first, the run-time objects passed
     # directly (instantiate would otherwise turn dataclass arguments into dicts)
-    planner = instantiate(cfg.trajectory, _partial_=True, _convert_="all")(waypoints=waypoints)
-    overshoot = float(cfg.task.insertion_overshoot)
+    planner = instantiate(trajectory, _partial_=True, _convert_="all")(waypoints=waypoints)
+    overshoot = float(task.insertion_overshoot)
     if waypoints.goal is not None and overshoot != 0.0:
-        require(TaskConfig, "task", press_duration=cfg.task.press_duration)  # the config check's rules
-        too_long = press_problem(cfg, has_target=True)
+        require(TaskConfig, "task", press_duration=task.press_duration)  # the config check's rules
+        too_long = press_problem(overshoot, task.press_duration, task.settle_time, has_target=True)
         if too_long:
             raise ValueError(too_long)
-        planner = PressHome(planner, overshoot * waypoints.axis, cfg.task.press_duration)
+        planner = PressHome(planner, overshoot * waypoints.axis, task.press_duration)
     return planner
 
 
-def prepare(cfg: DictConfig) -> Simulation:
-    """Build scene, arm, start posture, planner and controller for ``cfg``."""
-    scene = build_scene(cfg)
+def prepare(cfg: DictConfig, settings: SimSettings | None = None) -> Simulation:
+    """Build scene, arm, start posture, planner and controller for ``cfg`` (a composed config).
+
+    The boundary of the simulation layer: the settings it reads are made typed here, once
+    (:func:`compliant_docking.sim.settings.sim_settings`; ``settings``: those of ``cfg`` when
+    the caller made them already), and the planner and the controller get theirs by
+    instantiation; the config's own checks that need the built objects (the robot's
+    joints, the exact step count) are asked with the config here too.
+    """
+    if settings is None:
+        settings = sim_settings(cfg)
+    robot, task = settings.robot, settings.task
+    scene = build_scene(settings)
     model, arm = scene.model, scene.arm
     nv = model.nv
     wrong = per_joint_problems(cfg, nv)  # the config check's rules, for a run built from Python
     if wrong:
         raise ValueError(wrong[0])
-    require(RobotConfig, "robot", max_torque=list(cfg.robot.max_torque))  # the motors' clip below
+    require(RobotConfig, "robot", max_torque=robot.max_torque)  # the motors' clip below
 
-    waypoints = task_waypoints(cfg, scene)
-    planner = plan(cfg, waypoints)
-    duration, notes = run_duration(cfg, planner)
+    waypoints = task_waypoints(settings, scene)
+    planner = plan(cfg.trajectory, task, waypoints)
+    duration, notes = run_duration(task, planner)
     ref = Reference()
     planner.sample(0.0, ref)
-    q0 = arm.solve_ik(pin.SE3(ref.rot.copy(), ref.pos.copy()), np.asarray(cfg.robot.ik_guess, dtype=float))
+    q0 = arm.solve_ik(pin.SE3(ref.rot.copy(), ref.pos.copy()), np.asarray(robot.ik_guess, dtype=float))
 
-    limits = np.asarray(cfg.robot.max_torque, dtype=float)
+    limits = np.asarray(robot.max_torque, dtype=float)
     model.actuator_ctrlrange[:] = np.column_stack([-limits, limits])  # the software clip
     data = mujoco.MjData(model)
     start_held(model, data, q0)
     planned_steps = int(round(duration / model.opt.timestep))
-    extra_steps = int(round(hold_extension(cfg, planner) / model.opt.timestep))
+    extra_steps = int(round(hold_extension(task, planner) / model.opt.timestep))
     n_steps = planned_steps + extra_steps  # allocated; the run ends at Simulation.end
     too_large = memory_problem(cfg, n_steps=n_steps)  # before the logs are allocated
     if too_large:
         raise ValueError(too_large)
     # what the controller does not know: its own model (model_error) and its sensors (sensor)
-    error = model_error.draw(cfg.get("model_error"))
-    believed = model_error.believed_arm(cfg, scene, error)
+    error = model_error.draw(settings.model_error)
+    believed = model_error.believed_arm(settings, scene, error)
     sensors = sensing(
-        cfg, float(model.opt.timestep), n_steps, nv, believed.tool if error.tool_changed else None
+        settings.sensor, float(model.opt.timestep), n_steps, nv, believed.tool if error.tool_changed else None
     )
     context = ControlContext(
         arm=arm if believed is None else believed,
         dt=float(model.opt.timestep),
         n_steps=n_steps,
         q_home=q0.copy(),
-        velocity_limits=np.asarray(cfg.robot.velocity_limits, dtype=float),
-        torque_limits=np.asarray(cfg.robot.max_torque, dtype=float),
+        velocity_limits=np.asarray(robot.velocity_limits, dtype=float),
+        torque_limits=np.asarray(robot.max_torque, dtype=float),
         joint_friction=model.dof_frictionloss * error.friction_scale,
         joint_damping=model.dof_damping * error.damping_scale,
         axis=waypoints.axis,
@@ -319,6 +331,7 @@ def prepare(cfg: DictConfig) -> Simulation:
     controller = instantiate(cfg.controller, _partial_=True, _convert_="all")(context=context)
     return Simulation(
         cfg=cfg,
+        settings=settings,
         scene=scene,
         data=data,
         q0=q0,

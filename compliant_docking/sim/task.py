@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import numpy as np
 import pinocchio as pin
-from omegaconf import DictConfig
 
 from compliant_docking.config.ranges import require
 from compliant_docking.config.schemas import TaskConfig
@@ -12,9 +11,10 @@ from compliant_docking.config.validate import quaternion_problem, start_problems
 from compliant_docking.planning.base import Planner, Waypoints
 from compliant_docking.sim.geometry.fragment import MATED
 from compliant_docking.sim.scene import Scene
+from compliant_docking.sim.settings import SimSettings
 
 
-def task_waypoints(cfg: DictConfig, scene: Scene) -> Waypoints:
+def task_waypoints(settings: SimSettings, scene: Scene) -> Waypoints:
     """Start and goal TCP poses and the docking axis, from the socket pose the planner believes.
 
     Without ``task.init_quat`` the plug points along the socket axis into the socket.
@@ -23,11 +23,12 @@ def task_waypoints(cfg: DictConfig, scene: Scene) -> Waypoints:
     keyed one, the mating roll (tcp x along the believed seat's x, turned by a multiple
     of 360°/symmetry; :mod:`compliant_docking.sim.geometry.fragment`) nearest to it.
     """
-    task = cfg.task
+    task = settings.task
     stroke = np.asarray(task.stroke, dtype=float)
     length = float(np.linalg.norm(stroke))
-    guess = scene.arm.tcp_placement(np.asarray(cfg.robot.ik_guess, dtype=float)).rotation
-    unplaced = start_problems(cfg, has_target=scene.socket is not None)  # the config check's rule
+    guess = scene.arm.tcp_placement(np.asarray(settings.robot.ik_guess, dtype=float)).rotation
+    # the config check's rule
+    unplaced = start_problems(task.stroke, task.init_pos, has_target=scene.socket is not None)
     if unplaced:
         raise ValueError(unplaced[0])
     if scene.socket is None:
@@ -54,17 +55,17 @@ def task_waypoints(cfg: DictConfig, scene: Scene) -> Waypoints:
     return Waypoints(start=pin.SE3(rot, start_pos), goal=pin.SE3(rot, start_pos + stroke), axis=axis)
 
 
-def nominal_waypoints(cfg: DictConfig) -> Waypoints:
+def nominal_waypoints(settings: SimSettings) -> Waypoints:
     """The task's waypoints from the config alone, up to a rigid motion of the whole path:
     :func:`task_waypoints` places the goal at start + ``task.stroke`` with the start's
     orientation, so the planner's duration and its own checks are those of the run.
     For the checks before a run (compliant_docking/run/preflight.py); no scene needed."""
-    task = cfg.task
+    task = settings.task
     stroke = np.asarray(task.stroke, dtype=float)
     length = float(np.linalg.norm(stroke))
     start = pin.SE3(np.eye(3), np.zeros(3) if task.init_pos is None else np.asarray(task.init_pos, float))
     axis = stroke / length if length > 0 else np.array([0.0, 0.0, 1.0])
-    if cfg.target.get("name") in (None, "none"):
+    if settings.socket is None:
         return Waypoints(start=start, goal=None, axis=axis)
     return Waypoints(start=start, goal=pin.SE3(np.eye(3), start.translation + stroke), axis=axis)
 
@@ -101,13 +102,13 @@ def _quat_matrix(quat, setting: str) -> np.ndarray:
     return pin.Quaternion(q[0], q[1], q[2], q[3]).matrix()
 
 
-def run_duration(cfg: DictConfig, planner: Planner) -> tuple[float, list[str]]:
+def run_duration(task: TaskConfig, planner: Planner) -> tuple[float, list[str]]:
     """The run length: task.duration if set, else the planner's duration + settle_time."""
     notes: list[str] = []
-    if cfg.task.duration is None:
-        return planner.duration + float(cfg.task.settle_time), notes
-    require(TaskConfig, "task", duration=cfg.task.duration)  # the config check's rule
-    duration = float(cfg.task.duration)
+    if task.duration is None:
+        return planner.duration + float(task.settle_time), notes
+    require(TaskConfig, "task", duration=task.duration)  # the config check's rule
+    duration = float(task.duration)
     if duration < planner.duration:
         notes.append(
             f"task.duration = {duration:g} s is shorter than the trajectory "
@@ -116,12 +117,12 @@ def run_duration(cfg: DictConfig, planner: Planner) -> tuple[float, list[str]]:
     return duration, notes
 
 
-def hold_extension(cfg: DictConfig, planner: Planner) -> float:
+def hold_extension(task: TaskConfig, planner: Planner) -> float:
     """The longest a held reference may extend the run [s]: ``task.max_hold`` when the
     planner's reference is bounded (``trajectory.lead_limit``) and the run length follows
     the planner (``task.duration`` null); else 0 (a fixed run length is kept as given)."""
-    if planner.lead_limit is None or cfg.task.duration is not None:
+    if planner.lead_limit is None or task.duration is not None:
         return 0.0
-    max_hold = float(cfg.task.get("max_hold", 0.0))
+    max_hold = float(task.max_hold)
     require(TaskConfig, "task", max_hold=max_hold)  # the config check's rule
     return max_hold

@@ -4,6 +4,7 @@ after Holm's correction over the preset's comparisons."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -11,8 +12,15 @@ import pytest
 import yaml
 
 from compliant_docking import CONF_DIR
-from compliant_docking.sim.misalignment import draw
-from tests.helpers import make_cfg
+from compliant_docking.sim.misalignment import Misalignment
+from compliant_docking.sim.misalignment import draw as draw_settings
+from compliant_docking.sim.settings import sim_settings
+from tests.helpers import make_cfg, misalignment
+
+
+def draw(given: dict) -> Misalignment:
+    """The draw of ``task.misalignment`` set to ``given``."""
+    return draw_settings(misalignment(**given))
 
 
 def preset(name: str) -> tuple[dict, dict]:
@@ -62,20 +70,21 @@ def test_every_controller_robot_and_planner_docks_into_the_same_sockets():
     # can change, so the composed misalignment with its seed set to each value is what a
     # composition with that seed gives
     composed = [
-        make_cfg(
-            "+experiment=controller_comparison",
-            f"controller={controller}",
-            f"robot={robot}",
-            f"trajectory={trajectory}",
-            "task.misalignment.seed=0",
+        sim_settings(
+            make_cfg(
+                "+experiment=controller_comparison",
+                f"controller={controller}",
+                f"robot={robot}",
+                f"trajectory={trajectory}",
+                "task.misalignment.seed=0",
+            )
         ).task.misalignment
         for controller, robot, trajectory in sorted(cells)
     ]
     for seed in (0, 7):
         poses = set()
         for misalignment in composed:
-            misalignment.seed = seed
-            poses.add(draw(misalignment))
+            poses.add(draw_settings(dataclasses.replace(misalignment, seed=seed)))
         assert len(poses) == 1, poses
         [pose] = poses
         assert pose == draw({**preset("controller_comparison")[1], "seed": seed})

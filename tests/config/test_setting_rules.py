@@ -20,6 +20,7 @@ from hydra.utils import instantiate
 from compliant_docking.config.validate import check, per_joint_problems
 from compliant_docking.sim import simulate
 from compliant_docking.sim.models import mount_placement
+from compliant_docking.sim.settings import sim_settings
 from compliant_docking.sim.task import nominal_waypoints
 from tests.helpers import make_cfg
 
@@ -133,8 +134,9 @@ def test_the_planner_refuses_in_the_config_checks_words(key, overrides):
     cfg = make_cfg(*(FREE_SPACE[:1] + FREE_SPACE[2:] if free else DOCKING), *overrides)
     refused = [p for p in check(cfg) if _about(key, p)]
     assert refused, f"the config check accepts {overrides}"
+    settings = sim_settings(cfg)
     with pytest.raises(ValueError) as refusal:
-        simulate.plan(cfg, nominal_waypoints(cfg))
+        simulate.plan(cfg.trajectory, settings.task, nominal_waypoints(settings))
     assert str(refusal.value) == " ".join(refused)
 
 
@@ -143,8 +145,9 @@ def test_the_press_is_refused_in_the_config_checks_words():
     cfg = make_cfg("task.press_duration=5", "task.settle_time=1")
     refused = [p for p in check(cfg) if _about("task.press_duration", p)]
     assert len(refused) == 1
+    settings = sim_settings(cfg)
     with pytest.raises(ValueError) as refusal:
-        simulate.plan(cfg, nominal_waypoints(cfg))
+        simulate.plan(cfg.trajectory, settings.task, nominal_waypoints(settings))
     assert str(refusal.value) == refused[0]
 
 

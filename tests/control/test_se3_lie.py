@@ -338,8 +338,8 @@ def test_orientation_error_reaching_pi_fails_the_run(tmp_path, monkeypatch):
     init_quat = f"[{quat.w},{quat.x},{quat.y},{quat.z}]"
     real_prepare = simulate.prepare
 
-    def prepare_rotated(cfg):
-        sim = real_prepare(cfg)
+    def prepare_rotated(cfg, settings=None):
+        sim = real_prepare(cfg, settings)
         # joint 7 turns the tool about its own axis (through the TCP): 170° away from the
         # reference, and spinning further away
         sim.data.qpos[6] += math.radians(170.0)

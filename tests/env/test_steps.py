@@ -12,6 +12,7 @@ import pytest
 
 from compliant_docking.env import make_env
 from compliant_docking.sim import misalignment
+from compliant_docking.sim.settings import sim_settings
 from tests.helpers import make_cfg, push_at_tcp
 
 SHORT = ("trajectory.duration=1", "task.settle_time=1", "task.progress=false")
@@ -34,7 +35,7 @@ def test_reset_draws_the_misalignment_of_the_same_seed_as_a_run():
     obs, info = env.reset(seed=7)
     again, info_again = env.reset(seed=7)
     assert np.array_equal(obs, again) and info == info_again
-    run = misalignment.draw(make_cfg(*DRAWN, "task.misalignment.seed=7").task.misalignment)
+    run = misalignment.draw(sim_settings(make_cfg(*DRAWN, "task.misalignment.seed=7")).task.misalignment)
     assert (
         info["seed"] == 7
         and info["misalignment_x_m"] == run.x

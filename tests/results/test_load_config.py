@@ -26,6 +26,7 @@ def job(path: Path, *overrides: str, record: dict | None = None, config: bool = 
     if config:  # as Hydra writes it: unresolved (target.geometry.plug_radius is ${…})
         (path / ".hydra" / "config.yaml").write_text(OmegaConf.to_yaml(cfg))
     from compliant_docking.sim.misalignment import record_for
+    from compliant_docking.sim.settings import sim_settings
 
     metrics = {
         "status": "ok",
@@ -35,7 +36,7 @@ def job(path: Path, *overrides: str, record: dict | None = None, config: bool = 
         "controller": cfg.controller.name,
         "trajectory": cfg.trajectory.name,
         "peak_axial_force_N": 1.0,
-        **record_for(cfg),
+        **record_for(sim_settings(cfg)),
         **(record or {}),
     }
     (path / "metrics.json").write_text(json.dumps(metrics))

@@ -25,6 +25,7 @@ from compliant_docking.sim.geometry.keyed import keyed_plug_inertia, keyed_socke
 from compliant_docking.sim.geometry.mesh import keyed_cad_pair
 from compliant_docking.sim.geometry.solid import Solid
 from compliant_docking.sim.scene import build_scene
+from compliant_docking.sim.settings import sim_settings
 from tests.helpers import REPO_ROOT, make_cfg
 from tests.sim.conftest import QUICK
 
@@ -106,7 +107,9 @@ def test_converter_writes_fragments_the_scene_loads(converted):
     assert m["clearance"]["nominal_clearance_m"] == pytest.approx(SOCKET.clearance, abs=1e-6)
     assert m["clearance"]["pieces_clearance_m"] >= 0.5 * SOCKET.clearance
     out = result.out_dir
-    scene = build_scene(make_cfg(f"tool.mjcf={out / 'tool.xml'}", f"target.mjcf={out / 'target.xml'}"))
+    scene = build_scene(
+        sim_settings(make_cfg(f"tool.mjcf={out / 'tool.xml'}", f"target.mjcf={out / 'target.xml'}"))
+    )
     assert scene.key.symmetry == 4
     assert 0.0 < scene.key.yaw_play_deg <= SOCKET.yaw_play_deg + 0.01  # pieces can only take play away
     # the mating frame: tcp 60 mm from the mounting face, the seat at the tip

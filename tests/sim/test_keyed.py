@@ -22,6 +22,7 @@ from compliant_docking.sim.geometry.keyed import (
     keyed_plug_vertices,
 )
 from compliant_docking.sim.scene import build_scene
+from compliant_docking.sim.settings import sim_settings
 from compliant_docking.sim.simulate import prepare
 from tests.helpers import make_cfg
 
@@ -138,9 +139,9 @@ def test_keyed_plug_inertia_matches_mujoco_mesh_inertia(sides):
 
 # --------------------------------------------------------------------------- the key
 def test_fragments_declare_the_key_and_the_scene_combines_them():
-    scene = build_scene(make_cfg(*KEYED))
+    scene = build_scene(sim_settings(make_cfg(*KEYED)))
     assert scene.key == Key(4, pytest.approx(SOCKET.yaw_play_deg))
-    assert build_scene(make_cfg()).key == Key(0, None)  # the round cone
+    assert build_scene(sim_settings(make_cfg())).key == Key(0, None)  # the round cone
     spec = build_keyed_plug(replace(PLUG, sides=6), None)
     assert read_key(spec, "test") == Key(6, None)
 

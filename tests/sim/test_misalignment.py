@@ -10,17 +10,27 @@ import pytest
 
 from compliant_docking.run.rundir import read_timeseries
 from compliant_docking.run.runner import execute
-from compliant_docking.sim.misalignment import (
-    RECORD_KEYS,
-    Misalignment,
-    draw,
-    record_for,
-)
-from compliant_docking.sim.scene import socket_pose
+from compliant_docking.sim import misalignment as drawing
+from compliant_docking.sim.misalignment import RECORD_KEYS, Misalignment
+from compliant_docking.sim.scene import socket_pose as pose_of
+from compliant_docking.sim.settings import sim_settings
 from compliant_docking.sim.simulate import prepare
-from tests.helpers import make_cfg
+from tests.helpers import make_cfg, misalignment
 
 M = "task.misalignment"
+
+
+def draw(given: dict | None) -> Misalignment:
+    """The draw of ``task.misalignment`` set to ``given`` (None: no settings)."""
+    return drawing.draw(None if given is None else misalignment(**given))
+
+
+def socket_pose(cfg):
+    return pose_of(sim_settings(cfg))
+
+
+def record_for(cfg) -> dict:
+    return drawing.record_for(sim_settings(cfg))
 
 
 def test_default_is_no_misalignment():

@@ -9,6 +9,7 @@ from compliant_docking.results import load_runs
 from compliant_docking.run.runner import execute
 from compliant_docking.sim import dynamics, model_error
 from compliant_docking.sim.geometry.collision import SOCKET_BIT
+from compliant_docking.sim.settings import sim_settings
 from compliant_docking.sim.simulate import prepare
 from tests.helpers import FREE_SPACE_HOLD, make_cfg
 
@@ -51,22 +52,25 @@ def test_model_error_draws_are_reproducible_and_independent():
         "model_error.tool_com_offset_m_range=[-0.005,0.005]",
         "task.misalignment.seed=11",
     )
-    first, again = model_error.draw(cfg.model_error), model_error.draw(cfg.model_error)
+    first, again = (
+        model_error.draw(sim_settings(cfg).model_error),
+        model_error.draw(sim_settings(cfg).model_error),
+    )
     assert first == again and first.seed == 11
     assert 0.8 <= first.tool_mass_scale <= 1.2 and 0.5 <= first.friction_scale <= 1.5
     assert max(abs(c) for c in first.tool_com_offset) <= 0.005 and first.link_mass_scale == 1.0
     alone = make_cfg("model_error.tool_mass_scale_range=[0.8,1.2]", "task.misalignment.seed=11")
-    assert model_error.draw(alone.model_error).tool_mass_scale == first.tool_mass_scale
+    assert model_error.draw(sim_settings(alone).model_error).tool_mass_scale == first.tool_mass_scale
     cfg.model_error.seed = 12
-    assert model_error.draw(cfg.model_error).tool_mass_scale != first.tool_mass_scale
+    assert model_error.draw(sim_settings(cfg).model_error).tool_mass_scale != first.tool_mass_scale
 
 
 def test_contact_draws_are_written_on_the_plug_and_socket_geoms():
     """dynamics=randomised: the drawn friction, solref and solimp width are the model's on
     every plug and socket collision geom, the same for the same seed."""
     cfg = make_cfg("dynamics=randomised", "task.misalignment.seed=4")
-    draw = dynamics.draw(cfg.dynamics)
-    assert draw == dynamics.draw(cfg.dynamics) and not draw.is_nominal
+    draw = dynamics.draw(sim_settings(cfg).dynamics)
+    assert draw == dynamics.draw(sim_settings(cfg).dynamics) and not draw.is_nominal
     model = prepare(cfg).scene.model
     colliding = np.flatnonzero((model.geom_contype == SOCKET_BIT) | (model.geom_conaffinity == SOCKET_BIT))
     assert len(colliding) > 10
@@ -90,7 +94,7 @@ def test_the_drawn_errors_are_columns_of_load_runs(tmp_path):
     )
     execute(cfg, tmp_path / "run", figures=False, echo=False)
     row = load_runs(tmp_path / "run").iloc[0]
-    drawn = model_error.draw(cfg.model_error)
+    drawn = model_error.draw(sim_settings(cfg).model_error)
     assert row["model_error_tool_mass_scale"] == drawn.tool_mass_scale
     assert row["model_error_tool_mass_kg"] == pytest.approx(0.3 * (drawn.tool_mass_scale - 1.0))
     assert row["model_error_seed"] == 3

@@ -6,13 +6,14 @@ import pinocchio as pin
 import pytest
 
 from compliant_docking.sim.scene import build_scene
+from compliant_docking.sim.settings import sim_settings
 from tests.helpers import make_cfg
 
 
 @pytest.mark.parametrize("robot", ["iiwa14", "fr3"])
 @pytest.mark.parametrize("physics", ["space", "earth"])
 def test_mass_matrix_and_bias_match_mujoco(robot, physics):
-    scene = build_scene(make_cfg(f"robot={robot}", f"physics={physics}"))
+    scene = build_scene(sim_settings(make_cfg(f"robot={robot}", f"physics={physics}")))
     model, arm = scene.model, scene.arm
     data = mujoco.MjData(model)
     rng = np.random.default_rng(7)
@@ -34,7 +35,7 @@ def test_mass_matrix_and_bias_match_mujoco(robot, physics):
 
 
 def test_jdot_v_matches_finite_difference():
-    scene = build_scene(make_cfg())
+    scene = build_scene(sim_settings(make_cfg()))
     arm = scene.arm
     rng = np.random.default_rng(3)
     q = arm.q_lower + (arm.q_upper - arm.q_lower) * rng.uniform(0.2, 0.8, size=arm.nv)

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from compliant_docking.sim.sensor import SENSED_COLUMNS, SensedWrench, SensorModel
+from compliant_docking.sim.settings import sim_settings
 from compliant_docking.sim.simulate import prepare
 from tests.helpers import FREE_SPACE_HOLD, make_cfg
 
@@ -34,7 +35,7 @@ def _step(n: int, at: int = 1) -> np.ndarray:
 
 def _settings(**changes):
     cfg = make_cfg("sensor=ideal", *(f"sensor.{k}={v}" for k, v in changes.items()))
-    return cfg.sensor
+    return sim_settings(cfg).sensor
 
 
 def test_the_filter_s_step_response_is_the_first_order_lag_at_the_sample_times():
@@ -125,7 +126,7 @@ def test_the_controller_gets_the_modelled_reading_and_the_log_keeps_both():
     n = sim.telemetry.count
     sensed = np.column_stack(list(sim.sensing.timeseries(n).values()))
     assert list(sim.sensing.timeseries(n)) == list(SENSED_COLUMNS)
-    expected = _respond(SensorModel.from_settings(cfg.sensor, DT), sim.telemetry.wrench[:n])
+    expected = _respond(SensorModel.from_settings(sim.settings.sensor, DT), sim.telemetry.wrench[:n])
     np.testing.assert_array_equal(sensed, expected)
     assert np.abs(sensed - sim.telemetry.wrench[:n]).max() > 0.05  # the noise is there
 
