@@ -64,6 +64,9 @@ class FrictionFeedForward:
             if self.mode is not FrictionComp.velocity
             else np.full_like(self.f, 1.0 / self.VELOCITY_SCALE)
         )
+        if self.active:  # load the compiled block now rather than in the loop's first step
+            zero = np.zeros_like(self.f)
+            self(zero, zero, zero)
 
     def __call__(self, tau_pre: np.ndarray, v: np.ndarray, bias: np.ndarray | None = None) -> np.ndarray:
         """The feed-forward torque (callers may skip the call when ``active`` is False).

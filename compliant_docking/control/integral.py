@@ -160,6 +160,8 @@ class PoseIntegral:
         it["axis"] = np.asarray(axis, dtype=float) / np.linalg.norm(axis)
         self.rot_gain = float(rot_gain)  # read every step by the laws
         self._no_rot_error = np.zeros(3)
+        # load the compiled step now rather than in the loop's first step (a scratch record)
+        _update(self.record.copy(), self._no_rot_error, np.zeros(6), self._no_rot_error)
 
     @classmethod
     def from_settings(cls, axis: np.ndarray, dt: float, **settings) -> PoseIntegral | None:
