@@ -1468,6 +1468,22 @@ MUTATIONS = (
         "compiled se3_lie: the integral moment dropped",
         SE3_KERNEL_TESTS,
     ),
+    Mutation(
+        "I6",
+        HQP_KERNEL,
+        "        F_r[i] += F_i[i] + preload * axis[i]",
+        "        F_r[i] += preload * axis[i]",
+        "compiled HQP: the integral force dropped",
+        HQP_KERNEL_TESTS,
+    ),
+    Mutation(
+        "I7",
+        INTEGRAL,
+        "    if it.lateral:",
+        "    if False:",
+        "lateral_only ignored: the integral winds up along the docking axis too",
+        ("tests/control/test_integral.py",),
+    ),
     # ------------------------------------------- the yielding friction feed-forward
     Mutation(
         "Y1",
