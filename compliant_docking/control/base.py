@@ -16,6 +16,7 @@ the law reads: q, v, M, M⁻¹, h, J, J̇v and the TCP pose and twist of this st
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from typing import Any
 
 import numpy as np
 from scipy.linalg import lapack
@@ -55,38 +56,33 @@ class FrictionFeedForward:
         self.f = np.asarray(friction, dtype=float).copy()
         self.b = np.asarray(damping, dtype=float).copy()
         self.active = bool(np.any(self.f > 0.0) or np.any(self.b > 0.0))
-        self._yielding = self.mode is FrictionComp.yielding
-        self._unbiased = self._yielding or self.mode is FrictionComp.torque_unbiased
+        self._unbiased = self.mode in (FrictionComp.yielding, FrictionComp.torque_unbiased)
         self._code = FRICTION_CODES[self.mode]
-        self._torque_mode = self.mode is not FrictionComp.velocity
         # the argument of tanh per unit of its input: 2/f (torque modes) or 1/0.01 (velocity)
         self._scale = (
             2.0 / np.where(self.f > 0.0, self.f, 1.0)
-            if self._torque_mode
+            if self.mode is not FrictionComp.velocity
             else np.full_like(self.f, 1.0 / self.VELOCITY_SCALE)
         )
+        if self.active:  # load the compiled block now rather than in the loop's first step
+            zero = np.zeros_like(self.f)
+            self(zero, zero, zero)
 
     def __call__(self, tau_pre: np.ndarray, v: np.ndarray, bias: np.ndarray | None = None) -> np.ndarray:
         """The feed-forward torque (callers may skip the call when ``active`` is False).
 
         ``bias``: the arm's h = C v + g of this step; needed by ``torque_unbiased`` and
-        ``yielding`` only.
+        ``yielding`` only. Every mode runs the compiled block
+        (:func:`~.kernel_blocks.friction_feed_forward`, the one implementation the compiled
+        laws call too): a dozen numpy calls on 7 numbers would cost several times more.
         """
         if self._unbiased and bias is None:
             raise ValueError(f"friction_comp={self.mode.value} needs the bias torques h of the step")
-        if self._yielding:  # compiled: a dozen numpy calls on 7 numbers would triple the cost
-            out = np.empty_like(self.f)
-            friction_feed_forward(tau_pre, v, bias, self.f, self.b, self._scale, self._code, out)
-            return out
-        if self._unbiased:
-            x = tau_pre - bias
-            x *= self._scale
-        else:
-            x = (tau_pre if self._torque_mode else v) * self._scale
-        np.tanh(x, out=x)
-        x *= self.f
-        x += self.b * v
-        return x
+        out = np.empty_like(self.f)
+        friction_feed_forward(
+            tau_pre, v, v if bias is None else bias, self.f, self.b, self._scale, self._code, out
+        )
+        return out
 
 
 class TaskInertia:
@@ -102,6 +98,10 @@ class TaskInertia:
     Steps using the fallback and the largest condition number seen are reported.
     ``threshold`` > 1: the range of ``controller.condition_threshold``
     (``config.schemas.CONDITION``), which the controllers check.
+
+    The compiled laws solve with ``kernel_blocks.cholesky``/``cholesky_solve``: LAPACK's
+    dposv in compiled form, not a second implementation of this law (kernel_blocks' doc says
+    why the numpy laws keep LAPACK).
     """
 
     def __init__(self, threshold: float, check_every: int = 10):
@@ -170,35 +170,18 @@ class Controller(ABC):
         friction_comp: FrictionComp,
         use_force_feedback: bool,
         name: str,
-        integral_gain: float,
-        integral_limit: float,
-        integral_lateral_only: bool,
-        integral_freeze_force: float,
-        integral_latch: bool,
-        integral_rot_gain: float,
-        integral_rot_limit: float,
+        **integral_settings: Any,
     ):
+        """``integral_settings``: the ``integral_*`` fields of
+        :class:`~compliant_docking.config.schemas.ControllerConfig`, passed on by name to
+        :meth:`PoseIntegral.from_settings` (a new one needs no line here)."""
         self.ctx = context
         self.arm = context.arm
         self.name = name
         self.use_force_feedback = bool(use_force_feedback)
         self.friction = FrictionFeedForward(context.joint_friction, context.joint_damping, friction_comp)
         # a force and a moment the law adds to its stiffness wrench (docs/controllers/integral.md)
-        self.integral = (
-            PoseIntegral(
-                integral_gain,
-                integral_limit,
-                context.axis,
-                context.dt,
-                lateral_only=integral_lateral_only,
-                freeze_force=integral_freeze_force,
-                latch=integral_latch,
-                rot_gain=integral_rot_gain,
-                rot_limit=integral_rot_limit,
-            )
-            if integral_gain or integral_rot_gain
-            else None
-        )
+        self.integral = PoseIntegral.from_settings(context.axis, context.dt, **integral_settings)
 
     @abstractmethod
     def compute(self, t: float, state: ArmModel, ref: Reference, wrench: np.ndarray) -> np.ndarray:

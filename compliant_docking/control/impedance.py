@@ -110,13 +110,12 @@ class ImpedanceController(Controller):
         a = self.G.dot(self._z)  # W⁻¹(K e + D ė + w)
         integral = self.integral
         if integral is not None:  # + W⁻¹[F_i; M_i]
-            i0, i1, i2 = integral.update(self._z_pos, wrench, self._z_rot)
+            i0, i1, i2, i3, i4, i5 = integral.step(self._z_pos, wrench, self._z_rot)
             w_inv = self._w_inv_m
             a[0] += w_inv * i0
             a[1] += w_inv * i1
             a[2] += w_inv * i2
             if integral.rot_gain != 0.0:
-                i3, i4, i5 = integral.torque
                 w_inv = self._w_inv_rot
                 a[3] += w_inv * i3
                 a[4] += w_inv * i4

@@ -1,6 +1,14 @@
 """Integral action on the TCP pose error, an option of every controller (``integral_*``;
 docs/controllers/integral.md, docs/control_laws.md "Integral action"): a force from the
-position error and a moment from the orientation error, frozen by one latch."""
+position error and a moment from the orientation error, frozen by one latch.
+
+One implementation: :func:`integral_step` (compiled) advances the state held in a numpy
+record (:data:`RECORD`: the parameters, then the state) that :class:`PoseIntegral` owns.
+The numpy laws call it through :meth:`PoseIntegral.update`; the HQP step kernel calls it
+on the same record (``PoseIntegral.record``), so the controller reads its diagnostics from
+the record whichever law advanced it. tests/control/integral_reference.py keeps the law in
+plain Python floats as the reference the compiled step is tested against, bit for bit.
+"""
 
 from __future__ import annotations
 
@@ -11,6 +19,85 @@ import pinocchio as pin
 
 from compliant_docking.config.ranges import require
 from compliant_docking.config.schemas import ControllerConfig
+from compliant_docking.control.jit import kernel
+
+#: the integral's record: its parameters (set once), then its state (advanced each step)
+RECORD = np.dtype(
+    [
+        ("on", np.bool_),  # False: the record of a controller without the integral action
+        ("gain", np.float64),  # [N/(m·s)] on the position error
+        ("limit", np.float64),  # [N] clamp of ‖F_i‖
+        ("rot_gain", np.float64),  # [N·m/(rad·s)] on the orientation error; 0: off
+        ("rot_limit", np.float64),  # [N·m] clamp of ‖M_i‖
+        ("dt", np.float64),  # [s] the control step
+        ("freeze_sq", np.float64),  # [N²] freeze_force²
+        ("lateral", np.bool_),  # drop the error's component along ``axis``
+        ("latch", np.bool_),  # frozen for good from the first step over freeze_force
+        ("axis", np.float64, (3,)),  # the docking axis (unit)
+        ("state", np.float64, (3,)),  # ∫P e dt [m·s]
+        ("force", np.float64, (3,)),  # F_i [N]
+        ("rot_state", np.float64, (3,)),  # ∫e_R dt [rad·s]
+        ("torque", np.float64, (3,)),  # M_i [N·m]
+        ("latched", np.bool_),  # frozen for good
+        ("frozen_steps", np.int64),
+        ("max_force", np.float64),  # [N] the largest ‖F_i‖
+        ("max_torque", np.float64),  # [N·m] the largest ‖M_i‖
+    ]
+)
+
+
+def off_record() -> np.ndarray:
+    """The record (one element) of a controller without the integral action: F_i = M_i = 0."""
+    return np.zeros(1, dtype=RECORD)
+
+
+@kernel
+def clamped_step(state, out, e0, e1, e2, dt, gain, limit):
+    """state ← state + dt·e, scaled back so that gain·‖state‖ ≤ limit (no wind-up past the
+    clamp); out ← gain·state; returns gain·‖state‖."""
+    s0, s1, s2 = state[0] + dt * e0, state[1] + dt * e1, state[2] + dt * e2
+    size = gain * math.sqrt(s0 * s0 + s1 * s1 + s2 * s2)
+    if size > limit:  # clamp the state with the output
+        shrink = limit / size
+        s0, s1, s2 = s0 * shrink, s1 * shrink, s2 * shrink
+        size = limit
+    state[0], state[1], state[2] = s0, s1, s2
+    out[0], out[1], out[2] = gain * s0, gain * s1, gain * s2
+    return size
+
+
+@kernel
+def integral_step(it, e0, e1, e2, wrench, rot_err):
+    """One step of the integral action on the record ``it`` (:data:`RECORD`; the law:
+    :class:`PoseIntegral`): e = x_d − x, ``wrench`` the measured [f; m], ``rot_err`` the
+    orientation error log3(R_d Rᵀ) (read only when ``rot_gain`` ≠ 0)."""
+    f0, f1, f2 = wrench[0], wrench[1], wrench[2]
+    if it.latched or f0 * f0 + f1 * f1 + f2 * f2 > it.freeze_sq:
+        it.frozen_steps += 1
+        it.latched = it.latch
+        return
+    if it.lateral:  # drop the component along the docking axis
+        u = it.axis
+        u0, u1, u2 = u[0], u[1], u[2]
+        along = e0 * u0 + e1 * u1 + e2 * u2
+        e0, e1, e2 = e0 - along * u0, e1 - along * u1, e2 - along * u2
+    size = clamped_step(it.state, it.force, e0, e1, e2, it.dt, it.gain, it.limit)
+    if size > it.max_force:
+        it.max_force = size
+    if it.rot_gain != 0.0:
+        r0, r1, r2 = rot_err[0], rot_err[1], rot_err[2]
+        size = clamped_step(it.rot_state, it.torque, r0, r1, r2, it.dt, it.rot_gain, it.rot_limit)
+        if size > it.max_torque:
+            it.max_torque = size
+
+
+@kernel
+def _update(record, error, wrench, rot_err):
+    """:func:`integral_step` on ``record[0]``; returns (F_i, M_i) as 6 floats."""
+    it = record[0]
+    integral_step(it, error[0], error[1], error[2], wrench, rot_err)
+    f, m = it.force, it.torque
+    return f[0], f[1], f[2], m[0], m[1], m[2]
 
 
 class PoseIntegral:
@@ -39,6 +126,9 @@ class PoseIntegral:
     axial part (≈1 N on the FR3) to the press force k × overshoot. Likewise the wrist's
     friction (0.25-0.76 N·m) against k_rot = 25 N·m/rad tilts the FR3's plug by ~1° at
     arrival; the orientation part takes it out in free space and keeps it frozen in contact.
+
+    The parameters and the state live in :attr:`record` (:data:`RECORD`), advanced by the
+    compiled :func:`integral_step`; the attributes below read it.
     """
 
     def __init__(
@@ -61,76 +151,64 @@ class PoseIntegral:
                 "controller.integral_gain and controller.integral_rot_gain are both 0: the integral "
                 "action is off, so there is no integral to build (the controller builds none)"
             )
-        self.gain, self.limit, self.dt = float(gain), float(limit), float(dt)
-        self.rot_gain, self.rot_limit = float(rot_gain), float(rot_limit)
-        u = np.asarray(axis, dtype=float) / np.linalg.norm(axis)
-        self.axis = tuple(u.tolist()) if lateral_only else None  # error component removed
-        self.freeze_sq = float(freeze_force) ** 2
-        self.latch = bool(latch)  # frozen for good from the first step over freeze_force
-        self.latched = False
-        # 3-vectors as Python floats: a few float operations cost less than numpy calls
-        self.state = (0.0, 0.0, 0.0)  # ∫P e dt [m·s]
-        self.force = (0.0, 0.0, 0.0)  # F_i [N]
-        self.rot_state = (0.0, 0.0, 0.0)  # ∫e_R dt [rad·s]
-        self.torque = (0.0, 0.0, 0.0)  # M_i [N·m]
-        self.frozen_steps = 0
-        self.max_force = 0.0
-        self.max_torque = 0.0
+        self.record = np.zeros(1, dtype=RECORD)
+        it = self.record[0]
+        it["on"], it["gain"], it["limit"], it["dt"] = True, gain, limit, dt
+        it["rot_gain"], it["rot_limit"] = rot_gain, rot_limit
+        it["freeze_sq"] = float(freeze_force) ** 2
+        it["lateral"], it["latch"] = bool(lateral_only), bool(latch)
+        it["axis"] = np.asarray(axis, dtype=float) / np.linalg.norm(axis)
+        self.rot_gain = float(rot_gain)  # read every step by the laws
+        self._no_rot_error = np.zeros(3)
+        # load the compiled step now rather than in the loop's first step (a scratch record)
+        _update(self.record.copy(), self._no_rot_error, np.zeros(6), self._no_rot_error)
+
+    @classmethod
+    def from_settings(cls, axis: np.ndarray, dt: float, **settings) -> PoseIntegral | None:
+        """The integral of a controller's ``integral_*`` settings (``integral_gain`` →
+        ``gain``, …), or None when both gains are 0 (the action is off)."""
+        kwargs = {key.removeprefix("integral_"): value for key, value in settings.items()}
+        if not (kwargs["gain"] or kwargs["rot_gain"]):
+            return None
+        return cls(kwargs.pop("gain"), kwargs.pop("limit"), axis, dt, **kwargs)
+
+    def _vector(self, name: str) -> tuple[float, float, float]:
+        return tuple(self.record[name][0].tolist())
+
+    state = property(lambda self: self._vector("state"), doc="∫P e dt [m·s]")
+    force = property(lambda self: self._vector("force"), doc="F_i [N, world]")
+    rot_state = property(lambda self: self._vector("rot_state"), doc="∫e_R dt [rad·s]")
+    torque = property(lambda self: self._vector("torque"), doc="M_i [N·m, world]")
+    latched = property(lambda self: bool(self.record["latched"][0]), doc="frozen for good")
+    frozen_steps = property(lambda self: int(self.record["frozen_steps"][0]), doc="steps frozen")
+
+    def step(self, error: np.ndarray, wrench: np.ndarray, rot_error: np.ndarray | None = None) -> tuple:
+        """[F_i; M_i] (6 floats, world) after this step's error x_d − x [m], measured wrench
+        [f; m] and, with the orientation part, orientation error e_R [rad, world]."""
+        return _update(self.record, error, wrench, self._no_rot_error if rot_error is None else rot_error)
 
     def update(self, error: np.ndarray, wrench: np.ndarray, rot_error=None) -> tuple[float, float, float]:
-        """F_i [N, world] after this step's error x_d − x [m], measured wrench [f; m] and,
-        with the orientation part, orientation error e_R [rad, world]; M_i is ``torque``."""
-        f0, f1, f2, _, _, _ = wrench.tolist()
-        if self.latched or f0 * f0 + f1 * f1 + f2 * f2 > self.freeze_sq:
-            self.frozen_steps += 1
-            self.latched = self.latch
-            return self.force
-        e0, e1, e2 = error.tolist()
-        if self.axis is not None:  # drop the component along the docking axis
-            u0, u1, u2 = self.axis
-            along = e0 * u0 + e1 * u1 + e2 * u2
-            e0, e1, e2 = e0 - along * u0, e1 - along * u1, e2 - along * u2
-        self.state, self.force, size = _clamped_step(self.state, e0, e1, e2, self.dt, self.gain, self.limit)
-        if size > self.max_force:
-            self.max_force = size
-        if self.rot_gain != 0.0:
-            r0, r1, r2 = rot_error.tolist()
-            self.rot_state, self.torque, size = _clamped_step(
-                self.rot_state, r0, r1, r2, self.dt, self.rot_gain, self.rot_limit
-            )
-            if size > self.max_torque:
-                self.max_torque = size
-        return self.force
+        """F_i [N, world] after this step (:meth:`step`); M_i is ``torque``."""
+        return self.step(error, wrench, rot_error)[:3]
 
     def update_pose(
         self, error: np.ndarray, wrench: np.ndarray, rot_d: np.ndarray, rot_T: np.ndarray
     ) -> tuple:
         """[F_i; M_i] (6 floats, world) after this step, for the laws that do not form e_R
         themselves: e_R = log3(R_d Rᵀ) from R_d and Rᵀ, only while the orientation part
-        still integrates (then ``update``)."""
-        rot_error = pin.log3(rot_d.dot(rot_T)) if self.rot_gain != 0.0 and not self.latched else None
-        return self.update(error, wrench, rot_error) + self.torque
+        still integrates."""
+        integrates = self.rot_gain != 0.0 and not self.record["latched"][0]
+        rot_error = pin.log3(rot_d.dot(rot_T)) if integrates else self._no_rot_error
+        return _update(self.record, error, wrench, rot_error)
 
     def diagnostics(self) -> dict:
+        it = self.record[0]
         out = {
-            "integral_frozen_steps": self.frozen_steps,
-            "integral_max_force_N": self.max_force,
+            "integral_frozen_steps": int(it["frozen_steps"]),
+            "integral_max_force_N": float(it["max_force"]),
             "integral_final_force_N": math.sqrt(sum(f * f for f in self.force)),
         }
         if self.rot_gain != 0.0:
-            out["integral_max_torque_Nm"] = self.max_torque
+            out["integral_max_torque_Nm"] = float(it["max_torque"])
             out["integral_final_torque_Nm"] = math.sqrt(sum(m * m for m in self.torque))
         return out
-
-
-def _clamped_step(state, e0, e1, e2, dt, gain, limit):
-    """(state + dt·e, gain·state, its norm), the state scaled back so the norm is at most
-    ``limit`` (no wind-up past the clamp). The compiled twin is hqp.kernel.clamped_step."""
-    s0, s1, s2 = state
-    s0, s1, s2 = s0 + dt * e0, s1 + dt * e1, s2 + dt * e2
-    size = gain * math.sqrt(s0 * s0 + s1 * s1 + s2 * s2)
-    if size > limit:  # clamp the state with the output
-        shrink = limit / size
-        s0, s1, s2 = s0 * shrink, s1 * shrink, s2 * shrink
-        size = limit
-    return (s0, s1, s2), (gain * s0, gain * s1, gain * s2), size

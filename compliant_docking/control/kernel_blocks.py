@@ -1,11 +1,19 @@
-"""Compiled building blocks shared by the step kernels (:mod:`~.se3_kernel`,
-:mod:`~.hqp.kernel`): a Cholesky factorization and solve that report failure as LAPACK does,
-and the friction feed-forward.
+"""Compiled building blocks shared by the laws: a Cholesky factorization and solve that
+report failure as LAPACK does, and the friction feed-forward.
 
-Each is the compiled twin of a numpy/LAPACK piece that the numpy laws (impedance) keep
-using (the numpy laws call the feed-forward's compiled block for the yielding mode, whose
-formula tests/control/test_base.py checks in closed form); tests/control/test_kernel_blocks.py
-checks every twin against its original on random inputs.
+The friction feed-forward (:func:`friction_feed_forward`) is the one implementation of that
+law: ``control.base.FrictionFeedForward`` calls it for every mode (the numpy laws), the step
+kernels call it in their loop; tests/control/test_kernel_blocks.py checks it against its
+closed form in numpy.
+
+:func:`cholesky` and :func:`cholesky_solve` are not a second implementation of one of our
+laws: they are LAPACK's dpotrf/dpotrs (dposv) written out so that a kernel can call them
+without leaving compiled code. ``control.base.TaskInertia`` (the numpy laws' Λ solve) calls
+LAPACK's dposv itself, with the condition estimate dpocon that has no compiled counterpart;
+calling these blocks there instead would not be bit-identical (OpenBLAS sums in another
+order: the factor and the solution differ in the last bits on 1998 of 2000 random 6×6
+systems), so the numpy laws keep LAPACK, and
+tests/control/test_kernel_blocks.py checks the compiled forms against it.
 """
 
 from __future__ import annotations
@@ -34,7 +42,8 @@ def friction_code(mode: FrictionComp | str) -> int:
 @kernel
 def cholesky(A, L):
     """Lower Cholesky factor of the symmetric A (its lower triangle is read) into L's lower
-    triangle; False (as LAPACK dpotrf's info ≠ 0) when a pivot is not positive (or NaN)."""
+    triangle; False (as LAPACK dpotrf's info ≠ 0) when a pivot is not positive (or NaN).
+    LAPACK's dpotrf in compiled form (module doc), not a law of ours."""
     m = A.shape[0]
     for j in range(m):
         s = A[j, j]
@@ -54,7 +63,7 @@ def cholesky(A, L):
 
 @kernel
 def cholesky_solve(L, x):
-    """x ← (L Lᵀ)⁻¹ x in place, L from :func:`cholesky`."""
+    """x ← (L Lᵀ)⁻¹ x in place, L from :func:`cholesky` (LAPACK's dpotrs in compiled form)."""
     m = L.shape[0]
     for i in range(m):
         t = x[i]
@@ -70,8 +79,8 @@ def cholesky_solve(L, x):
 
 @kernel
 def friction_feed_forward(tau_pre, v, h, f, b, scale, mode, out):
-    """Twin of ``control.base.FrictionFeedForward.__call__`` (mode: :data:`FRICTION_CODES`):
-    out = f·tanh(x) + b·v with x = 2τ_pre/f (torque), v/0.01 (velocity) or 2(τ_pre − h)/f
+    """The friction feed-forward (``control.base.FrictionFeedForward``, which calls it for
+    every mode; mode: :data:`FRICTION_CODES`): out = f·tanh(x) + b·v with x = 2τ_pre/f (torque), v/0.01 (velocity) or 2(τ_pre − h)/f
     (torque_unbiased); ``scale`` holds the factor of each mode. yielding: torque_unbiased's
     y = tanh(2(τ_pre − h)/f) times 1 − min(|v|/0.02, 1) where v·y < 0: out = f·y' + b·v."""
     for i in range(out.shape[0]):

@@ -301,7 +301,7 @@ def _run_without_joint_friction(out_dir, *overrides):
     ctrl.friction.f[:] = 0.0
     ctrl.friction.active = False
     if hasattr(ctrl, "_init_kernel"):  # hqp's compiled step holds its own copy of f
-        ctrl._init_kernel(ctrl._cst.size)
+        ctrl._init_kernel()
     sim.run()
     out_dir.mkdir(parents=True, exist_ok=True)
     return sim, evaluate(sim, out_dir, figures=False)

@@ -8,6 +8,7 @@ import pytest
 from compliant_docking.control.integral import PoseIntegral
 from compliant_docking.planning.base import Reference
 from compliant_docking.sim.simulate import prepare
+from tests.control.integral_reference import ReferenceIntegral
 from tests.helpers import FREE_SPACE_HOLD, make_cfg, push_at_tcp
 
 AXIS = np.array([0.0, 0.0, -1.0])
@@ -205,3 +206,25 @@ def test_fr3_arrives_straight_on_the_default_scene(controller):
     se3_lie), 0.047° (hqp) at first contact, against 1.05° / 1.05° / 0.29° without the
     orientation integral."""
     assert tilt_at_first_contact(f"controller={controller}") < 0.3
+
+
+@pytest.mark.parametrize("lateral_only", [True, False])
+@pytest.mark.parametrize("latch", [True, False])
+def test_compiled_step_is_the_python_law_bit_for_bit(lateral_only, latch):
+    """PoseIntegral's one compiled step against the law in Python floats
+    (tests/control/integral_reference.py) on random errors and wrenches that freeze it now
+    and then and drive both parts into their clamps: every output equal, not close."""
+    rng = np.random.default_rng(5)
+    axis = rng.normal(size=3)
+    settings = dict(lateral_only=lateral_only, freeze_force=2.0, latch=latch, rot_gain=150.0, rot_limit=0.5)
+    compiled = PoseIntegral(800.0, 1.5, axis, 0.001, **settings)
+    python = ReferenceIntegral(800.0, 1.5, axis, 0.001, **settings)
+    for k in range(3000):
+        error, rot_error = rng.normal(0.005, 0.01, size=3), rng.normal(0.02, 0.05, size=3)  # biased: clamps
+        wrench = rng.normal(scale=1.5 if k > 2000 else 0.3, size=6)  # freezes late in the run
+        assert compiled.step(error, wrench, rot_error) == python.step(error, wrench, rot_error)
+    assert (compiled.state, compiled.rot_state) == (python.state, python.rot_state)
+    assert compiled.frozen_steps == python.frozen_steps > 0 and compiled.latched == python.latched
+    d = compiled.diagnostics()
+    assert (d["integral_max_force_N"], d["integral_max_torque_Nm"]) == (python.max_force, python.max_torque)
+    assert d["integral_max_force_N"] == 1.5 and d["integral_max_torque_Nm"] == 0.5  # both clamped

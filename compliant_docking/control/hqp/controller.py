@@ -38,8 +38,6 @@ solve starts from a = 0, feasible by construction (docs/controllers/hqp.md).
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import pinocchio as pin
 
@@ -52,6 +50,7 @@ from compliant_docking.control.base import Controller, vector_setting
 from compliant_docking.control.hqp.compliance import PreloadRamp, modal_damping
 from compliant_docking.control.hqp.manipulability import check_revolute_chain
 from compliant_docking.control.hqp.qp_level import QPLevel
+from compliant_docking.control.integral import off_record
 from compliant_docking.control.kernel_blocks import friction_code
 from compliant_docking.control.observer import MomentumObserver
 from compliant_docking.planning.base import Reference
@@ -119,9 +118,8 @@ class HQPController(Controller):
         self.deadband = float(contact_deadband)
         self.sqrt_K0 = np.sqrt(self.K0)
         self._P = self.sqrt_K0[:, None] + self.sqrt_K0[None, :]  # D_r = √s·(Λ^½ ∘ P)
-        # the step kernel's workspace: every per-step buffer is a view into it
-        self._off, cst_size, ws_size = K.layout(n)
-        self._ws = np.zeros(ws_size)
+        # the step kernel's workspace (a record): every per-step buffer is a view of a field
+        self._work = np.zeros(1, dtype=K.work_dtype(n))
         self.threshold = float(condition_threshold)
         self.manipulability_threshold, self.singularity_weight = float(omega_th), float(k_sa)
         self.posture_stiffness = float(k_ji) * vector_setting(K_ji, n, "controller.K_ji")
@@ -142,66 +140,59 @@ class HQPController(Controller):
         self.null_space_metric = NullSpaceMetric(null_space_metric)
         self._inertia_metric = self.null_space_metric is NullSpaceMetric.inertia
         self._init_constraints(context, float(dt_p), eps_abs)
-        self._init_kernel(cst_size)
+        self._init_kernel()
 
         # per-run statistics and per-step records (the kernel's counters: properties below)
         self.steps = 0
         self.modal_damping_steps = 0
         self.level1_fallbacks = 0  # level 1 failed: unconstrained least squares, level 2 skipped
         self.level2_zero_steps = 0  # a = 0 (level 2 failed or skipped)
-        self._rec = np.zeros((int(context.n_steps), 4))  # F, K_r scale s, preload, manipulability w
+        self._rec = np.zeros(int(context.n_steps), dtype=K.STEP_RECORD)
 
-    def _view(self, field: int, *shape: int) -> np.ndarray:
-        """The workspace's field ``field`` (kernel.W_*) as an array of the given shape."""
-        start = self._off[field]
-        return self._ws[start : start + math.prod(shape)].reshape(shape)
+    def _view(self, field: str) -> np.ndarray:
+        """The workspace's field ``field`` (kernel.work_dtype), a view the kernel writes."""
+        return self._work[field][0]
 
-    def _init_kernel(self, cst_size: int) -> None:
-        """The kernel's constants (``cst``) and the views of its workspace this class reads."""
-        n, ws = self.n, self._ws
-        cst = np.zeros(cst_size)
+    def _init_kernel(self) -> None:
+        """The kernel's constants (``params``) and the views of its workspace this class reads."""
+        n = self.n
+        params = np.zeros(1, dtype=K.params_dtype(self.n))
         friction = self.friction
-        cst[: K.P_REG + 1] = (
-            self.deadband,
-            self.min_stiffness_ratio,
-            self.sigmoid_gain,
-            self.threshold,
-            self.manipulability_threshold,
-            self.singularity_weight,
-            self._inertia_metric,
-            self.use_force_feedback,
-            friction.active,
-            friction_code(friction.mode),
-            self.solve_every_step,
-            self.integral is not None,
-            REGULARISER,
-        )
-        if self.integral is not None:  # its update runs in the kernel (kernel.integral_step)
-            integral = self.integral
-            lateral = integral.axis is not None
-            cst[K.P_I_GAIN : K.P_I_ROT_LIMIT + 1] = (
-                integral.gain,
-                integral.limit,
-                integral.dt,
-                integral.freeze_sq,
-                lateral,
-                integral.latch,
-                integral.rot_gain,
-                integral.rot_limit,
-            )
-        parts = (self.K0, self._P, self.axis, self._T_ji, self._half, friction.f, friction.b, friction._scale)
-        for start, part in zip(self._off, parts):
-            cst[start : start + part.size] = part.reshape(-1)
-        self._cst = cst
+        for name, value in (
+            ("deadband", self.deadband),
+            ("K_min_ratio", self.min_stiffness_ratio),
+            ("k_alpha", self.sigmoid_gain),
+            ("threshold", self.threshold),
+            ("omega_th", self.manipulability_threshold),
+            ("k_sa", self.singularity_weight),
+            ("regulariser", REGULARISER),
+            ("inertia_metric", self._inertia_metric),
+            ("use_force_feedback", self.use_force_feedback),
+            ("solve_every_step", self.solve_every_step),
+            ("friction", friction.active),
+            ("friction_mode", friction_code(friction.mode)),
+            ("K0", self.K0),
+            ("P", self._P),
+            ("axis", self.axis),
+            ("T_ji", self._T_ji),
+            ("half", self._half),
+            ("friction_f", friction.f),
+            ("friction_b", friction.b),
+            ("friction_scale", friction._scale),
+        ):
+            params[name] = value
+        self._params = params
+        # the integral action's record (its state advanced by the kernel; off: F_i = M_i = 0)
+        self._integral = off_record() if self.integral is None else self.integral.record
         # the preload ramp's state lives in the workspace from now on
-        ws[K.W_PRELOAD : K.W_PRELOAD + 4] = self.preload.state
-        self.preload.state = ws[K.W_PRELOAD : K.W_PRELOAD + 4]
-        self._D = self._view(K.W_DK, 12, 6)[:6]  # of [D_r; K_r]
-        self._JMinv, self._lam = self._view(K.W_JMINV, 6, n), self._view(K.W_LAM, 6, 6)
-        self._lam_sqrt, self._V = self._view(K.W_LAM_SQRT, 6, 6), self._view(K.W_V, 6, 6)
-        self._root, self._b = self._view(K.W_ROOT, 6), self._view(K.W_B, 6)
-        self._a_null, self._Na = self._view(K.W_A_NULL, n), self._view(K.W_NA, n)
-        self._Z = self._view(K.W_Z_ROWS, 2, 3 * n)
+        self._view("preload")[:] = self.preload.state
+        self.preload.state = self._view("preload")
+        self._D = self._view("DK")[:6]  # of [D_r; K_r]
+        self._JMinv, self._lam = self._view("JMinv"), self._view("lam")
+        self._lam_sqrt, self._V = self._view("lam_sqrt"), self._view("V")
+        self._root, self._b = self._view("root"), self._view("b")
+        self._a_null, self._Na = self._view("a_null"), self._view("Na")
+        self._Z = self._view("Z")
         self._tau_fast = self._Z[1, 2 * n :]  # the final candidate's torque rows
         # Load the compiled kernel now (0.2 s from numba's cache, ~12 s to compile after a
         # source change) rather than in the loop's first step: one call on the arm's current
@@ -209,27 +200,28 @@ class HQPController(Controller):
         arm, z3, z6 = self.arm, np.zeros(3), np.zeros(6)
         K.hqp_step(
             arm.J, arm.M, arm.Minv, arm.h, arm.q, arm.v, arm.Jdot_v, arm.twist, arm.pos,
-            z6, z3, z6, z3, z6, cst, ws.copy(), self._off, np.zeros((1, 4)), 1,
+            z6, z3, z6, z3, z6, params, self._work.copy(), self._integral.copy(),
+            np.zeros(1, dtype=K.STEP_RECORD), 1,
         )  # fmt: skip
 
     # counters the kernel keeps in its workspace
     @property
     def lambda_floor_steps(self) -> int:
-        return int(self._ws[K.W_FLOOR])
+        return int(self._work["floor_steps"][0])
 
     @property
     def lambda_max_condition(self) -> float:
-        return float(self._ws[K.W_MAX_COND])
+        return float(self._work["max_cond"][0])
 
     @property
     def singularity_steps(self) -> int:
         """Steps with w < omega_th (singularity avoidance active)."""
-        return int(self._ws[K.W_SINGULAR])
+        return int(self._work["singular_steps"][0])
 
     @property
     def _fast_steps(self) -> int:
         """Steps where both closed forms met every row."""
-        return int(self._ws[K.W_FAST])
+        return int(self._work["fast_steps"][0])
 
     def _init_constraints(self, context: ControlContext, dt_p: float, eps_abs: float) -> None:
         """Constant parts of the 21 constraint rows, and the two QP levels.
@@ -259,7 +251,7 @@ class HQPController(Controller):
         self._half = half
         self._bounds = np.vstack([-half, half])
         eye = np.eye(n)
-        T = self._view(K.W_T, 3 * n + 1, 3 * n)
+        T = self._view("T")
         T[:n, :n], T[:n, n : 2 * n] = dt_p * eye, 0.5 * dt_p**2 * eye
         T[n : 2 * n, n : 2 * n] = eye
         T[2 * n : 3 * n, :n], T[2 * n : 3 * n, n : 2 * n] = eye, dt_p * eye
@@ -268,7 +260,7 @@ class HQPController(Controller):
         self._T_M = T[:n, 2 * n :]  # M (symmetric: Mᵀ = M)
         self._T_state = T[n:]  # [q, v, 1] → offsets o
         self._hhat = T[3 * n, 2 * n :]  # ĥ = h + friction feed-forward (a view)
-        self._Y = self._view(K.W_Y_ROWS, 2, 3 * n + 1)  # rows [q̈, q, v, 1]: level-1 and final candidates
+        self._Y = self._view("Y")  # rows [q̈, q, v, 1]: level-1 and final candidates
         self._Y[:, 3 * n] = 1.0
         self._X = self._Y[:, :n]
         self._Y_q, self._Y_v = self._Y[:, n : 2 * n], self._Y[:, 2 * n : 3 * n]
@@ -296,7 +288,7 @@ class HQPController(Controller):
         J, M, Minv = arm.J, arm.M, arm.Minv
         status = K.hqp_step(
             J, M, Minv, arm.h, arm.q, arm.v, arm.Jdot_v, arm.twist, arm.pos,
-            ref.twist, ref.pos, ref.accel, rot_err, w_ext, self._cst, self._ws, self._off, self._rec, k,
+            ref.twist, ref.pos, ref.accel, rot_err, w_ext, self._params, self._work, self._integral, self._rec, k,
         )  # fmt: skip
         if status == K.MODAL:  # Eq. 29's D_r is not positive definite: damp each mode critically
             self.modal_damping_steps += 1
@@ -304,7 +296,7 @@ class HQPController(Controller):
             self._D[:] = modal_damping(self._lam_sqrt, (V * self._root).dot(V.T), self.K0)
             status = K.hqp_back(
                 J, M, Minv, arm.h, arm.q, arm.v, arm.Jdot_v, arm.twist, arm.pos,
-                ref.twist, ref.pos, ref.accel, rot_err, self._cst, self._ws, self._off, self._rec, k,
+                ref.twist, ref.pos, ref.accel, rot_err, self._params, self._work, self._integral, self._rec, k,
             )  # fmt: skip
         if status == K.FAST:
             tau = self._tau_fast.copy()  # M(q̈ + N a) + ĥ
@@ -381,21 +373,7 @@ class HQPController(Controller):
         return False
 
     # ------------------------------------------------------------------ after the run
-    def _sync_integral(self) -> None:
-        """Copy the integral action's state from the kernel's workspace into
-        ``self.integral`` (whose ``update`` the kernel replaces), for its diagnostics."""
-        if self.integral is not None:
-            ws, integral = self._ws, self.integral
-            integral.state = tuple(ws[K.W_I_STATE : K.W_I_STATE + 3].tolist())
-            integral.force = tuple(ws[K.W_INTEGRAL : K.W_INTEGRAL + 3].tolist())
-            integral.frozen_steps, integral.max_force = int(ws[K.W_I_FROZEN]), float(ws[K.W_I_MAX])
-            integral.rot_state = tuple(ws[K.W_I_ROT_STATE : K.W_I_ROT_STATE + 3].tolist())
-            integral.torque = tuple(ws[K.W_I_TORQUE : K.W_I_TORQUE + 3].tolist())
-            integral.max_torque = float(ws[K.W_I_ROT_MAX])
-            integral.latched = bool(ws[K.W_I_LATCHED])
-
     def diagnostics(self) -> dict:
-        self._sync_integral()
         out = {
             "lambda_fallback_steps": self.lambda_floor_steps,
             "lambda_max_condition": float(self.lambda_max_condition),
@@ -415,10 +393,10 @@ class HQPController(Controller):
     def timeseries(self) -> dict[str, np.ndarray]:
         rec = self._rec[: self.steps]
         out = {
-            "hqp_F": rec[:, 0],
-            "hqp_K_r": rec[:, 1:2] * self.K0,  # columns hqp_K_r_1 … hqp_K_r_6
-            "hqp_preload": rec[:, 2],
-            "hqp_manipulability": rec[:, 3],
+            "hqp_F": rec["F"].copy(),
+            "hqp_K_r": rec["s"][:, None] * self.K0,  # columns hqp_K_r_1 … hqp_K_r_6
+            "hqp_preload": rec["preload"].copy(),
+            "hqp_manipulability": rec["w"].copy(),
         }
         if self.observer is not None:
             out.update(self.observer.timeseries())

@@ -4,8 +4,11 @@ scalar pieces it shares with Python (stiffness scale, preload ramp, manipulabili
 From the arm's state, the reference and the wrench: F, s, the preload, F_i, Λ⁻¹ = J M⁻¹ Jᵀ,
 its eigendecomposition (floored), Λ^½, Λ, D_r (PD check), F_r, b, level 1's closed form, w,
 ∇w, a_null, N a_null, the friction feed-forward, both candidates' 21 rows and the check.
-Everything the constrained path (ProxQP, in Python) reads goes to the flat workspace ``ws``
-(views: :func:`layout`); constants are in the flat ``cst``. Returns :data:`FAST` (τ =
+Inputs and outputs are numpy records, read and written by field name on both sides: the
+law's constants in ``params`` (:func:`params_dtype`), everything the constrained path (ProxQP,
+in Python) reads in ``work`` (:func:`work_dtype`), the integral action's parameters and
+state in ``integral`` (control/integral.py's record, advanced by its one compiled step), one
+row per step of ``rec`` (:data:`STEP_RECORD`). Returns :data:`FAST` (τ =
 Z[1, 2n:]), :data:`SLOW` / :data:`SLOW_OK1` (a row violated; level 1's candidate meets its
 rows with SLOW_OK1), :data:`MODAL` (Eq. 29's D_r not PD: the caller writes the modal
 design into D_r/√s and finishes the step with :func:`hqp_back`) or :data:`NOT_FINITE` (Λ⁻¹
@@ -19,25 +22,60 @@ import math
 
 import numpy as np
 
+from compliant_docking.control.integral import integral_step
 from compliant_docking.control.jit import kernel
 from compliant_docking.control.kernel_blocks import cholesky, cholesky_solve, friction_feed_forward
 
 FAST, SLOW, SLOW_OK1, MODAL, NOT_FINITE = 0, 1, 2, 3, 4
 
-# scalar parameters at the head of ``cst``
-P_DEADBAND, P_KMIN, P_KALPHA, P_THRESH, P_OMEGA, P_KSA = 0, 1, 2, 3, 4, 5
-P_INERTIA, P_USE_FF, P_FRICTION, P_FRICTION_MODE, P_EVERY, P_INTEGRAL, P_REG = 6, 7, 8, 9, 10, 11, 12
-P_I_GAIN, P_I_LIMIT, P_I_DT, P_I_FREEZE_SQ, P_I_LATERAL, P_I_LATCH = 13, 14, 15, 16, 17, 18  # integral
-P_I_ROT_GAIN, P_I_ROT_LIMIT = 19, 20  # the integral's orientation part
-N_PAR = 21
-# scalar state and results at the head of ``ws``
-W_PRELOAD = 0  # 4 floats: value, in contact, step, target (compliance.preload_step)
-W_FLOOR, W_MAX_COND, W_SINGULAR, W_FAST = 4, 5, 6, 7  # counters and the largest cond(Λ⁻¹)
-W_F, W_S, W_W, W_SQRT_S, W_INTEGRAL = 8, 9, 10, 11, 12  # F, s, w, √s, F_i (3)
-W_I_STATE, W_I_FROZEN, W_I_MAX = 15, 18, 19  # the integral's ∫P e dt (3), frozen steps, max ‖F_i‖
-W_I_LATCHED = 20  # 1 once the latched integral froze for good
-W_I_TORQUE, W_I_ROT_STATE, W_I_ROT_MAX = 21, 24, 27  # M_i (3), ∫e_R dt (3), max ‖M_i‖
-N_SCALARS = 28
+F8, I8, B1 = np.float64, np.int64, np.bool_
+#: the per-step record the controller's time series read
+STEP_RECORD = np.dtype([("F", F8), ("s", F8), ("preload", F8), ("w", F8)], align=True)
+
+
+def params_dtype(n: int) -> np.dtype:
+    """The law's constants for an n-joint arm (set once by the controller)."""
+    m = 3 * n
+    return np.dtype(
+        [
+            ("deadband", F8), ("K_min_ratio", F8), ("k_alpha", F8), ("threshold", F8),
+            ("omega_th", F8), ("k_sa", F8), ("regulariser", F8),
+            ("inertia_metric", B1), ("use_force_feedback", B1), ("solve_every_step", B1),
+            ("friction", B1), ("friction_mode", I8),  # kernel_blocks.FRICTION_CODES
+            ("K0", F8, (6,)), ("P", F8, (6, 6)),  # D_r/√s = Λ^½ ∘ P, P = √K0 + √K0ᵀ
+            ("axis", F8, (3,)),  # the docking axis (unit): the preload's direction
+            ("T_ji", F8, (2 * n + 1, n)),  # [q, v, 1] → q̈_ji
+            ("half", F8, (m,)),  # the rows' half widths
+            ("friction_f", F8, (n,)), ("friction_b", F8, (n,)), ("friction_scale", F8, (n,)),
+        ],
+        align=True,
+    )  # fmt: skip
+
+
+def work_dtype(n: int) -> np.dtype:
+    """The kernel's state, results and scratch for an n-joint arm (the controller reads it)."""
+    m = 3 * n
+    mat6 = (F8, (6, 6))
+    return np.dtype(
+        [
+            ("preload", F8, (4,)),  # value, in contact, step, target (compliance.preload_step)
+            ("floor_steps", I8), ("singular_steps", I8), ("fast_steps", I8),
+            ("max_cond", F8),  # the largest cond(Λ⁻¹)
+            ("F", F8), ("s", F8), ("sqrt_s", F8), ("w", F8),
+            ("DK", F8, (12, 6)),  # [D_r; K_r]
+            ("z", F8, (12,)), ("JMinv", F8, (6, n)),
+            ("lam_inv", *mat6), ("lam", *mat6), ("lam_sqrt", *mat6), ("V", *mat6),
+            ("root", F8, (6,)), ("F_r", F8, (6,)), ("b", F8, (6,)),
+            ("chol", *mat6), ("chol2", *mat6),  # two Cholesky factors
+            ("y", F8, (6,)), ("G", F8, (6, n)), ("grad", F8, (n,)), ("a_null", F8, (n,)), ("Na", F8, (n,)),
+            ("T", F8, (m + 1, m)),  # [q̈, q, v, 1] → the rows minus their mid values
+            ("Y", F8, (2, m + 1)), ("Z", F8, (2, m)),  # both candidates' [q̈, q, v, 1] and rows
+            ("ff", F8, (n,)),  # the friction feed-forward
+        ],
+        align=True,
+    )  # fmt: skip
+
+
 #: contact magnitude above which the preload ramps up [N] (docs/control_laws.md §2)
 PRELOAD_CONTACT_N = 1.0
 #: contact magnitude below which the contact counts as lost again [N] (hysteresis)
@@ -94,111 +132,41 @@ def gradient_over_w(J, G, out):
         out[i] += J[0, i] * bx + J[1, i] * by + J[2, i] * bz
 
 
-# Fields of ``cst`` (C_*) and ``ws`` (W_* arrays) in order; ``off[field]`` is where one starts.
-C_K0, C_P, C_AXIS, C_TJI, C_HALF, C_FRICTION_F, C_FRICTION_B, C_FRICTION_SCALE = range(8)
-W_DK, W_Z, W_JMINV, W_LAM_INV, W_LAM, W_LAM_SQRT, W_V, W_ROOT, W_FR, W_B = range(8, 18)
-W_CHOL, W_CHOL2, W_Y, W_G, W_GRAD, W_A_NULL, W_NA, W_T, W_Y_ROWS, W_Z_ROWS, W_FF = range(18, 29)
-N_FIELDS = 29
-
-
-def layout(n: int) -> tuple[np.ndarray, int, int]:
-    """(off, size of cst, size of ws) for an n-joint arm: off (int64) has each field's start.
-
-    cst: K0 (6), P (6×6), axis (3), T_ji ((2n+1)×n), half (3n), friction f, b, scale (n each);
-    ws: [D_r; K_r] (12×6), z (12), J M⁻¹ (6×n), Λ⁻¹, Λ, Λ^½, V (6×6 each), λ^½, F_r, b (6),
-    two Cholesky factors (6×6), y (6), G (6×n), ∇w/w, a_null, N a_null (n each),
-    T ((3n+1)×3n), Y (2×(3n+1)), Z (2×3n), friction feed-forward (n).
-    """
-    m = 3 * n
-    cst_sizes = (6, 36, 3, (2 * n + 1) * n, m, n, n, n)
-    ws_sizes = (72, 12, 6 * n, 36, 36, 36, 36, 6, 6, 6, 36, 36, 6, 6 * n, n, n, n)
-    ws_sizes_rows = ((m + 1) * m, 2 * (m + 1), 2 * m, n)  # T, Y, Z, friction feed-forward
-    ws_all = ws_sizes + ws_sizes_rows
-    off = np.zeros(N_FIELDS, dtype=np.int64)
-    off[:8] = N_PAR + np.cumsum((0,) + cst_sizes[:-1])
-    off[8:] = N_SCALARS + np.cumsum((0,) + ws_all[:-1])
-    return off, N_PAR + sum(cst_sizes), N_SCALARS + sum(ws_all)
+@kernel
+def transposed_product(A, y, out):
+    """out = Aᵀy (A: 6×n)."""
+    for c in range(A.shape[1]):
+        t = 0.0
+        for i in range(6):
+            t += y[i] * A[i, c]
+        out[c] = t
 
 
 @kernel
-def _vec(a, off, field, size):
-    return a[off[field] : off[field] + size]
-
-
-@kernel
-def _mat(a, off, field, rows, cols):
-    return a[off[field] : off[field] + rows * cols].reshape((rows, cols))
-
-
-@kernel
-def clamped_step(ws, state, out, e0, e1, e2, dt, gain, limit):
-    """control.integral._clamped_step, compiled: ws[state:state+3] += dt·e, scaled back so
-    that gain·‖state‖ ≤ limit; ws[out:out+3] = gain·state; returns that norm."""
-    s0, s1, s2 = ws[state] + dt * e0, ws[state + 1] + dt * e1, ws[state + 2] + dt * e2
-    size = gain * math.sqrt(s0 * s0 + s1 * s1 + s2 * s2)
-    if size > limit:  # clamp the state with the output
-        shrink = limit / size
-        s0, s1, s2 = s0 * shrink, s1 * shrink, s2 * shrink
-        size = limit
-    ws[state], ws[state + 1], ws[state + 2] = s0, s1, s2
-    ws[out], ws[out + 1], ws[out + 2] = gain * s0, gain * s1, gain * s2
-    return size
-
-
-@kernel
-def integral_step(cst, ws, wrench, e0, e1, e2, u0, u1, u2, rot_err):
-    """control.integral.PoseIntegral.update, compiled (the same float operations in the
-    same order; the state in ws, the parameters in cst, u the docking axis, rot_err the
-    orientation error log3(R_d Rᵀ))."""
-    f0, f1, f2 = wrench[0], wrench[1], wrench[2]
-    if ws[W_I_LATCHED] != 0.0 or f0 * f0 + f1 * f1 + f2 * f2 > cst[P_I_FREEZE_SQ]:
-        ws[W_I_FROZEN] += 1.0
-        ws[W_I_LATCHED] = cst[P_I_LATCH]
-        return
-    if cst[P_I_LATERAL] != 0.0:  # drop the component along the docking axis
-        along = e0 * u0 + e1 * u1 + e2 * u2
-        e0, e1, e2 = e0 - along * u0, e1 - along * u1, e2 - along * u2
-    size = clamped_step(ws, W_I_STATE, W_INTEGRAL, e0, e1, e2, cst[P_I_DT], cst[P_I_GAIN], cst[P_I_LIMIT])
-    if size > ws[W_I_MAX]:
-        ws[W_I_MAX] = size
-    if cst[P_I_ROT_GAIN] != 0.0:
-        r0, r1, r2, dt = rot_err[0], rot_err[1], rot_err[2], cst[P_I_DT]
-        size = clamped_step(
-            ws, W_I_ROT_STATE, W_I_TORQUE, r0, r1, r2, dt, cst[P_I_ROT_GAIN], cst[P_I_ROT_LIMIT]
-        )
-        if size > ws[W_I_ROT_MAX]:
-            ws[W_I_ROT_MAX] = size
-
-
-@kernel
-def hqp_step(J, M, Minv, h, q, v, Jdot_v, twist, pos, ref_twist, ref_pos, ref_accel, rot_err, wrench, cst, ws, off, rec, k):  # fmt: skip
-    """One control step's closed-form path (module doc); ``rot_err`` = log3(R_d Rᵀ)."""
+def hqp_step(J, M, Minv, h, q, v, Jdot_v, twist, pos, ref_twist, ref_pos, ref_accel, rot_err, wrench, params, work, integral, rec, k):  # fmt: skip
+    """One control step's closed-form path (module doc); ``rot_err`` = log3(R_d Rᵀ);
+    ``params``, ``work``, ``integral``: one-element record arrays (module doc)."""
     n = J.shape[1]
-    JMinv, lam_inv, lam = (
-        _mat(ws, off, W_JMINV, 6, n),
-        _mat(ws, off, W_LAM_INV, 6, 6),
-        _mat(ws, off, W_LAM, 6, 6),
-    )
-    lam_sqrt, V, root = _mat(ws, off, W_LAM_SQRT, 6, 6), _mat(ws, off, W_V, 6, 6), _vec(ws, off, W_ROOT, 6)
-    DK, L = _mat(ws, off, W_DK, 12, 6), _mat(ws, off, W_CHOL, 6, 6)
-    K0, P = _vec(cst, off, C_K0, 6), _mat(cst, off, C_P, 6, 6)
+    par, ws = params[0], work[0]
+    JMinv, lam_inv, lam, lam_sqrt, V, root = ws.JMinv, ws.lam_inv, ws.lam, ws.lam_sqrt, ws.V, ws.root
+    DK, L, K0, P = ws.DK, ws.chol, par.K0, par.P
 
     # contact magnitude F, stiffness K_r = s·K0, preload p
     F = 0.0
-    if cst[P_USE_FF] != 0.0:
+    if par.use_force_feedback:
         ww = 0.0
         for i in range(6):
             ww += wrench[i] * wrench[i]
-        F = max(math.sqrt(ww) - cst[P_DEADBAND], 0.0)
-    s = stiffness_scale(F, cst[P_KMIN], cst[P_KALPHA])
-    ws[W_F], ws[W_S], ws[W_SQRT_S] = F, s, math.sqrt(s)
+        F = max(math.sqrt(ww) - par.deadband, 0.0)
+    s = stiffness_scale(F, par.K_min_ratio, par.k_alpha)
+    ws.F, ws.s, ws.sqrt_s = F, s, math.sqrt(s)
     for i in range(6):
         DK[6 + i, i] = s * K0[i]
-    preload_step(ws[W_PRELOAD : W_PRELOAD + 4], F)
-    if cst[P_INTEGRAL] != 0.0:  # F_i, M_i from x_d − x, e_R (docs/controllers/integral.md)
-        a = off[C_AXIS]
+    preload_step(ws.preload, F)
+    it = integral[0]
+    if it.on:  # F_i, M_i from x_d − x, e_R (docs/controllers/integral.md)
         e0, e1, e2 = ref_pos[0] - pos[0], ref_pos[1] - pos[1], ref_pos[2] - pos[2]
-        integral_step(cst, ws, wrench, e0, e1, e2, cst[a], cst[a + 1], cst[a + 2], rot_err)
+        integral_step(it, e0, e1, e2, wrench, rot_err)
 
     # Λ⁻¹ = J M⁻¹ Jᵀ (symmetric by construction), its eigendecomposition and floor
     for i in range(6):
@@ -219,17 +187,17 @@ def hqp_step(J, M, Minv, h, q, v, Jdot_v, twist, pos, ref_twist, ref_pos, ref_ac
     eigval, vectors = np.linalg.eigh(lam_inv)
     V[:, :] = vectors
     top, low = eigval[5], eigval[0]
-    if low * ws[W_MAX_COND] < top:  # a new largest condition number
-        ws[W_MAX_COND] = top / low if low > 0.0 else math.inf
-    if low * cst[P_THRESH] < top:  # also when low ≤ 0: lift to λ_max/threshold
-        ws[W_FLOOR] += 1.0
-        floor = max(top, 1e-300) / cst[P_THRESH]
+    if low * ws.max_cond < top:  # a new largest condition number
+        ws.max_cond = top / low if low > 0.0 else math.inf
+    if low * par.threshold < top:  # also when low ≤ 0: lift to λ_max/threshold
+        ws.floor_steps += 1
+        floor = max(top, 1e-300) / par.threshold
         for i in range(6):
             eigval[i] = max(eigval[i], floor)
     for i in range(6):
         root[i] = np.sqrt(eigval[i])
     # Λ^½ = Vs Vᵀ, Λ = Vs Vsᵀ with Vs = V diag(λ^-½); D_r/√s = Λ^½ ∘ P
-    Vs = _mat(ws, off, W_CHOL2, 6, 6)  # scratch (the back half uses it for a factor)
+    Vs = ws.chol2  # scratch (the back half uses it for a factor)
     for i in range(6):
         for c in range(6):
             Vs[i, c] = V[i, c] / root[c]
@@ -248,29 +216,26 @@ def hqp_step(J, M, Minv, h, q, v, Jdot_v, twist, pos, ref_twist, ref_pos, ref_ac
             DK[j, i] = t * P[j, i]
     if not cholesky(DK[:6], L):
         return MODAL
-    return hqp_back(J, M, Minv, h, q, v, Jdot_v, twist, pos, ref_twist, ref_pos, ref_accel, rot_err, cst, ws, off, rec, k)  # fmt: skip
+    return hqp_back(J, M, Minv, h, q, v, Jdot_v, twist, pos, ref_twist, ref_pos, ref_accel, rot_err, params, work, integral, rec, k)  # fmt: skip
 
 
 @kernel
-def hqp_back(J, M, Minv, h, q, v, Jdot_v, twist, pos, ref_twist, ref_pos, ref_accel, rot_err, cst, ws, off, rec, k):  # fmt: skip
+def hqp_back(J, M, Minv, h, q, v, Jdot_v, twist, pos, ref_twist, ref_pos, ref_accel, rot_err, params, work, integral, rec, k):  # fmt: skip
     """The step after Λ and D_r/√s (called by :func:`hqp_step`; after :data:`MODAL`, by the
     controller once D_r/√s holds the modal design)."""
     n = J.shape[1]
     m = 3 * n
-    DK, z, JMinv = _mat(ws, off, W_DK, 12, 6), _vec(ws, off, W_Z, 12), _mat(ws, off, W_JMINV, 6, n)
-    lam_inv, lam = _mat(ws, off, W_LAM_INV, 6, 6), _mat(ws, off, W_LAM, 6, 6)
-    F_r, b, y = _vec(ws, off, W_FR, 6), _vec(ws, off, W_B, 6), _vec(ws, off, W_Y, 6)
-    L, L2, G = _mat(ws, off, W_CHOL, 6, 6), _mat(ws, off, W_CHOL2, 6, 6), _mat(ws, off, W_G, 6, n)
-    grad, a_null, Na = _vec(ws, off, W_GRAD, n), _vec(ws, off, W_A_NULL, n), _vec(ws, off, W_NA, n)
-    T, Y = _mat(ws, off, W_T, m + 1, m), _mat(ws, off, W_Y_ROWS, 2, m + 1)
-    Z, ff = _mat(ws, off, W_Z_ROWS, 2, m), _vec(ws, off, W_FF, n)
-    T_ji, half = _mat(cst, off, C_TJI, 2 * n + 1, n), _vec(cst, off, C_HALF, m)
-    preload = ws[W_PRELOAD]
-    reg = cst[P_REG]
+    par, ws, it = params[0], work[0], integral[0]
+    DK, z, JMinv, lam_inv, lam = ws.DK, ws.z, ws.JMinv, ws.lam_inv, ws.lam
+    F_r, b, y, L, L2, G = ws.F_r, ws.b, ws.y, ws.chol, ws.chol2, ws.G
+    grad, a_null, Na, T, Y, Z, ff = ws.grad, ws.a_null, ws.Na, ws.T, ws.Y, ws.Z, ws.ff
+    T_ji, half, axis = par.T_ji, par.half, par.axis
+    preload = ws.preload[0]
+    reg = par.regulariser
 
     for i in range(6):
         for j in range(6):
-            DK[i, j] *= ws[W_SQRT_S]
+            DK[i, j] *= ws.sqrt_s
     # F_r = [D_r; K_r]ᵀ [ν_d − ν; x_d − x; log3(R_d Rᵀ)] + [F_i; M_i] + p·[axis; 0]
     for i in range(6):
         z[i] = ref_twist[i] - twist[i]
@@ -282,11 +247,12 @@ def hqp_back(J, M, Minv, h, q, v, Jdot_v, twist, pos, ref_twist, ref_pos, ref_ac
         for i in range(12):
             t += z[i] * DK[i, j]
         F_r[j] = t
+    F_i, M_i = it.force, it.torque
     for i in range(3):  # F_i, M_i (0 when off) and the preload along the axis
-        F_r[i] += ws[W_INTEGRAL + i] + preload * cst[off[C_AXIS] + i]
-    if cst[P_I_ROT_GAIN] != 0.0:
+        F_r[i] += F_i[i] + preload * axis[i]
+    if it.rot_gain != 0.0:
         for i in range(3):
-            F_r[3 + i] += ws[W_I_TORQUE + i]
+            F_r[3 + i] += M_i[i]
     # b = Λ⁻¹F_r + ν̇_d − J̇v
     for i in range(6):
         t = 0.0
@@ -311,22 +277,17 @@ def hqp_back(J, M, Minv, h, q, v, Jdot_v, twist, pos, ref_twist, ref_pos, ref_ac
         for i in range(6):
             w *= L[i, i]
         y[:] = b
-        if cst[P_INERTIA] != 0.0:  # M⁻¹Jᵀ(J M⁻¹Jᵀ + εI)⁻¹ b: min ‖Jq̈ − b‖² + ε q̈ᵀMq̈
+        if par.inertia_metric:  # M⁻¹Jᵀ(J M⁻¹Jᵀ + εI)⁻¹ b: min ‖Jq̈ − b‖² + ε q̈ᵀMq̈
             for i in range(6):
                 for j in range(i + 1):
                     JJ[i, j] = lam_inv[i, j]
                 JJ[i, i] += reg
             cholesky(JJ, L2)  # Λ⁻¹ + εI is PD whenever J Jᵀ + εI is
             cholesky_solve(L2, y)
-            rows = JMinv  # q̈ = (J M⁻¹)ᵀy
+            transposed_product(JMinv, y, X0)  # q̈ = (J M⁻¹)ᵀy
         else:
             cholesky_solve(L, y)
-            rows = J  # q̈ = Jᵀy
-        for c in range(n):
-            t = 0.0
-            for i in range(6):
-                t += y[i] * rows[i, c]
-            X0[c] = t
+            transposed_product(J, y, X0)  # q̈ = Jᵀy
     else:  # J Jᵀ + εI is PD for every finite J (a non-finite one returned above)
         X0[:] = np.nan
     for c in range(n):
@@ -340,9 +301,9 @@ def hqp_back(J, M, Minv, h, q, v, Jdot_v, twist, pos, ref_twist, ref_pos, ref_ac
         for i in range(2 * n):
             t += Y[0, n + i] * T_ji[i, c]
         a_null[c] = t + T_ji[2 * n, c]
-    omega = cst[P_OMEGA]
-    if w < omega and chol_ok and cst[P_KSA] > 0.0:
-        ws[W_SINGULAR] += 1.0
+    omega = par.omega_th
+    if w < omega and chol_ok and par.k_sa > 0.0:
+        ws.singular_steps += 1
         for i in range(6):
             for c in range(n):
                 G[i, c] = J[i, c]
@@ -350,7 +311,7 @@ def hqp_back(J, M, Minv, h, q, v, Jdot_v, twist, pos, ref_twist, ref_pos, ref_ac
             cholesky_solve(L, G[:, c])
         gradient_over_w(J, G, grad)
         direction = ff  # scratch until the friction feed-forward
-        if cst[P_INERTIA] != 0.0:
+        if par.inertia_metric:
             for i in range(n):
                 t = 0.0
                 for j in range(n):
@@ -363,7 +324,7 @@ def hqp_back(J, M, Minv, h, q, v, Jdot_v, twist, pos, ref_twist, ref_pos, ref_ac
             norm += direction[i] * direction[i]
         norm = math.sqrt(norm)
         if norm > 0.0:
-            gain = cst[P_KSA] * (omega - w) / (omega * norm)
+            gain = par.k_sa * (omega - w) / (omega * norm)
             for i in range(n):
                 a_null[i] += gain * direction[i]
     # N a_null = a_null − M⁻¹JᵀΛ J a_null; the final candidate q̈ + N a_null
@@ -396,10 +357,9 @@ def hqp_back(J, M, Minv, h, q, v, Jdot_v, twist, pos, ref_twist, ref_pos, ref_ac
             for i in range(m + 1):
                 t += Y[r, i] * T[i, c]
             Z[r, c] = t
-    if cst[P_FRICTION] != 0.0:  # ĥ = h + the feed-forward of the final candidate's τ_pre
-        f, fb = _vec(cst, off, C_FRICTION_F, n), _vec(cst, off, C_FRICTION_B, n)
-        scale = _vec(cst, off, C_FRICTION_SCALE, n)
-        friction_feed_forward(Z[1, 2 * n :], v, h, f, fb, scale, int(cst[P_FRICTION_MODE]), ff)
+    if par.friction:  # ĥ = h + the feed-forward of the final candidate's τ_pre
+        f, fb, scale = par.friction_f, par.friction_b, par.friction_scale
+        friction_feed_forward(Z[1, 2 * n :], v, h, f, fb, scale, par.friction_mode, ff)
         for i in range(n):
             Z[0, 2 * n + i] += ff[i]
             Z[1, 2 * n + i] += ff[i]
@@ -412,9 +372,10 @@ def hqp_back(J, M, Minv, h, q, v, Jdot_v, twist, pos, ref_twist, ref_pos, ref_ac
         if not abs(Z[1, c]) <= half[c]:
             ok1 = False
     if k < rec.shape[0]:
-        rec[k, 0], rec[k, 1], rec[k, 2], rec[k, 3] = ws[W_F], ws[W_S], preload, w
-    ws[W_W] = w
-    if ok0 and ok1 and cst[P_EVERY] == 0.0:
-        ws[W_FAST] += 1.0
+        row = rec[k]
+        row.F, row.s, row.preload, row.w = ws.F, ws.s, preload, w
+    ws.w = w
+    if ok0 and ok1 and not par.solve_every_step:
+        ws.fast_steps += 1
         return FAST
     return SLOW_OK1 if ok0 else SLOW
