@@ -10,6 +10,7 @@ Tolerances:
 * diagnostics that count steps: equal.
 """
 
+import copy
 import math
 
 import numpy as np
@@ -133,15 +134,15 @@ def test_domain_errors_keep_their_messages():
 def test_kernel_matches_the_numpy_reference(gains):
     """The compiled step against the numpy twist step (tests/control/se3_reference.py) on
     random states, orientation errors in both coefficient branches and a desired wrench:
-    diagonal gains with the apparent-inertia floor and the friction feed-forward, and general
-    symmetric A, D, K (no floor: it needs a diagonal A)."""
+    the FR3's friction feed-forward and integral action (position and orientation); diagonal
+    gains with the apparent-inertia floor, and general symmetric A, D, K (no floor: it needs a
+    diagonal A)."""
     sim = simulate.prepare(make_cfg(*FR3))  # the FR3: joint friction, a feed-forward
     arm = sim.scene.arm
     rng = np.random.default_rng(5)
     F_d = np.array([1.0, -2.0, 0.5, 0.1, 0.05, -0.2])
     params = OmegaConf.to_container(sim.cfg.controller, resolve=True)
     params.pop("_target_")
-    params.update(integral_gain=0.0, integral_rot_gain=0.0)  # its wrench: an input, tested above
     if gains == "diagonal":  # light enough for the floor to act on some states
         A, D, K = np.diag([2.0, 2.5, 3.0, 0.2, 0.25, 0.3]), np.diag([40.0, 50.0, 60.0, 4.0, 5.0, 6.0]), None
         extra = {"apparent_inertia_floor": 0.75, "friction_comp": FrictionComp.torque_unbiased}
@@ -157,10 +158,13 @@ def test_kernel_matches_the_numpy_reference(gains):
     active, compared = [], 0
     for k in range(24):
         ref, wrench = random_case(arm, rng, (0.0, 1e-3, 0.3, 2.0)[k % 4])
+        wrench *= 0.1  # below the integral's freeze force (1 N): it integrates every step
+        # the integral wrench [F_i; M_i] of this step, from a copy of the integral action
+        F_i = copy.deepcopy(ctrl.integral).update_pose(ref.pos - arm.pos, wrench, ref.rot, arm.rot_T)
         tau = ctrl.compute(0.0, arm, ref, wrench)
         floor = ctrl.inertia_floor
         P = None if floor is None else floor.P
-        want = reference_step(ctrl, arm, ref, wrench, P=P)
+        want = reference_step(ctrl, arm, ref, wrench, F_i, P=P)
         for name in ("lam", "V_tilde", "F_tilde", "Vdot_ref"):
             assert close(getattr(ctrl, name), want[name], 1e-10), (k, name)
         if np.linalg.cond(want_lam_inv(ctrl, arm)) < 1e6:  # a random posture may be near-singular
@@ -173,6 +177,7 @@ def test_kernel_matches_the_numpy_reference(gains):
                 assert close(P, want_P, 1e-10), k
             active.append(P is not None)
     assert compared >= 16
+    assert np.all(ctrl.integral.state) and np.all(ctrl.integral.torque)  # the integral acted
     if gains == "diagonal":
         assert ctrl.friction.active and True in active  # the floor acted on a refresh
     assert not np.any(ctrl.K - np.diag(np.diag(ctrl.K))) == (gains == "diagonal")
