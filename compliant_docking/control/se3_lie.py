@@ -151,17 +151,14 @@ class SE3LieController(Controller):
         **common,
     ):
         super().__init__(context, **common)
-        given = {
-            "A_diag": (A_diag, A),
-            "D_diag": (D_diag, D),
-            "K_diag": (K_diag, K),
-        }  # a matrix: checked below
+        # the schema's ranges (a diagonal given as a matrix instead: checked below)
+        given = {"A_diag": (A_diag, A), "D_diag": (D_diag, D), "K_diag": (K_diag, K)}
         ranges.require(
             schemas.SE3LieConfig,
             "controller",
             **{k: d for k, (d, m) in given.items() if m is None},
             null_damping=null_damping,
-            condition_threshold=condition_threshold,  # the schema's ranges
+            condition_threshold=condition_threshold,
             desired_wrench=desired_wrench,
             apparent_inertia_floor=apparent_inertia_floor,
         )
@@ -188,7 +185,6 @@ class SE3LieController(Controller):
         self.task_inertia = TaskInertia(condition_threshold)
         # G = A⁻¹[I, D] (one Cholesky solve, here): A⁻¹(x − D y) = G·[x; −y]
         self.G = np.ascontiguousarray(cho_solve(self._A_chol, np.hstack([np.eye(6), self.D])))
-        self._twist = self.formulation is Formulation.twist
         # the deviation from §3 that keeps the delayed force feedback stable (None: off, or
         # no force feedback: no such loop; docs/controllers/se3_lie.md): A_eff ⪰ ratio·Λ_b,
         # applied to A⁻¹(…) in V̇_ref
@@ -207,7 +203,7 @@ class SE3LieController(Controller):
         self.lam_dot = self.gamma = self.lam_ddot_ref = None
         self.dexp = self.dexp_inv = self.dexp_dot = None
         # the step: one compiled kernel (se3_kernel.py); lambda_space finishes V̇_ref in numpy
-        self._kernel = StepKernel(self, None if self._twist else self._lambda_space)
+        self._kernel = StepKernel(self, None if self.formulation is Formulation.twist else self._lambda_space)
 
     # ------------------------------------------------------------------ the step
     def compute(self, t: float, state: ArmModel, ref: Reference, wrench: np.ndarray) -> np.ndarray:
