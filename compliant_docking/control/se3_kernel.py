@@ -357,7 +357,7 @@ class StepKernel:
     staged ones, the floor's and TaskInertia's counters. ``lambda_finish`` (the λ-space
     formulation) replaces V̇_ref on every (then staged) step."""
 
-    def __init__(self, ctrl, lambda_finish: LambdaFinish | None = None):
+    def __init__(self, ctrl, n_steps: int, lambda_finish: LambdaFinish | None = None):
         nv = ctrl.arm.nv
         fr, floor = ctrl.friction, ctrl.inertia_floor
         self.params = np.zeros(1, params_dtype(nv))
@@ -375,6 +375,8 @@ class StepKernel:
         self.floor_state = floor.state if floor is not None else np.zeros(1, FLOOR_STATE)
         self.ctrl, self.floor, self.ti, self.integral = ctrl, floor, ctrl.task_inertia, ctrl.integral
         self.lambda_finish = lambda_finish
+        self._lam_log = np.zeros((max(n_steps, 0), 6))  # λ of every step, the run's time series
+        self._k = 0  # steps taken
         self._err = np.zeros(3)
         self._no_force = (0.0,) * 6
         self._warm_up(ctrl.arm)
@@ -382,6 +384,10 @@ class StepKernel:
     def field(self, name: str) -> np.ndarray:
         """A copy of the state's field ``name`` (the last step's value)."""
         return self.state[name][0].copy()
+
+    def lam_log(self) -> np.ndarray:
+        """λ of the steps taken so far (rows of the run's length at most)."""
+        return self._lam_log[: min(self._k, len(self._lam_log))]
 
     def _warm_up(self, arm) -> None:
         """Load (or compile) the kernels for this step's argument types now, on throwaway
@@ -396,7 +402,7 @@ class StepKernel:
         finish(np.zeros(6), arm.M, arm.v, arm.h, self.params, state)
 
     def __call__(self, t, arm, ref, wrench) -> np.ndarray:
-        ctrl, floor, ti, state = self.ctrl, self.floor, self.ti, self.state
+        floor, ti, state = self.floor, self.ti, self.state
         integral = self.integral
         if integral is None:
             F_i = self._no_force
@@ -408,15 +414,15 @@ class StepKernel:
         # are advanced here
         staged = ti.due() or self.lambda_finish is not None
         refresh = floor is not None and floor.due()
-        k = ctrl._k
-        ctrl._k = k + 1
+        k = self._k
+        self._k = k + 1
         status = step(STAGE if staged else FULL, k, refresh, ref.rot, ref.pos, ref.twist,
                       ref.accel, arm.rot, arm.pos, arm.twist, arm.Jdot_v, arm.J, arm.Minv,
                       arm.M, arm.v, arm.h, wrench, F_i, self.params, self.floor_state, state,
-                      ctrl._lam_log)
+                      self._lam_log)
         if status > NEEDS_SOLVE:
             st = state[0]
-            ctrl.raise_out_of_domain(t, st["lam"][3:].tolist(), float(st["theta"]),
+            self.ctrl.raise_out_of_domain(t, st["lam"][3:].tolist(), float(st["theta"]),
                                      st["w_prev"].tolist(), status == FLIPPED)
         if floor is not None:  # ApparentInertiaFloor.current's bookkeeping
             if refresh:

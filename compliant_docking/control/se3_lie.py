@@ -196,14 +196,13 @@ class SE3LieController(Controller):
             raise ValueError("controller.apparent_inertia_floor needs a diagonal A (or null: off)")
         self.inertia_floor = inertia_floor(np.diag(self.A), apparent_inertia_floor, self.use_force_feedback)
 
-        # per-step record of λ (exponential coordinates of the pose error)
-        self._lam_log = np.zeros((max(int(context.n_steps), 0), 6))
-        self._k = 0
         self._z = np.zeros(12)  # [dexp⁻ᵀ(γ − Kλ); −dexp·λ̇] for G (lambda_space)
         self.lam_dot = self.gamma = self.lam_ddot_ref = None
         self.dexp = self.dexp_inv = self.dexp_dot = None
         # the step: one compiled kernel (se3_kernel.py); lambda_space finishes V̇_ref in numpy
-        self._kernel = StepKernel(self, None if self.formulation is Formulation.twist else self._lambda_space)
+        self._kernel = StepKernel(
+            self, int(context.n_steps), None if self.formulation is Formulation.twist else self._lambda_space
+        )
 
     # ------------------------------------------------------------------ the step
     def compute(self, t: float, state: ArmModel, ref: Reference, wrench: np.ndarray) -> np.ndarray:
@@ -280,4 +279,4 @@ class SE3LieController(Controller):
         return out
 
     def timeseries(self) -> dict[str, np.ndarray]:
-        return {"se3_lambda": self._lam_log[: min(self._k, len(self._lam_log))]}
+        return {"se3_lambda": self._kernel.lam_log()}
