@@ -1185,8 +1185,8 @@ MUTATIONS = (
     Mutation(
         "C13",
         SHAPING,
-        "        c = np.minimum(mu * (1.0 / self.ratio), 1.0)",
-        "        c = np.minimum(mu * self.ratio, 1.0)",
+        "        c[m] = min(mu[m] * inv_ratio, 1.0)",
+        "        c[m] = min(mu[m] * ratio, 1.0)",
         "apparent-inertia floor at 1/ratio instead of ratio",
         ("tests/control/test_shaping.py",),
     ),
@@ -1483,6 +1483,30 @@ MUTATIONS = (
         "    if False:",
         "lateral_only ignored: the integral winds up along the docking axis too",
         ("tests/control/test_integral.py",),
+    ),
+    Mutation(
+        "E1",
+        SE3_KERNEL,
+        "            acc += K[i, j] * lam[j]",
+        "            acc += K[i, j] * lam[j] if i == j else 0.0",
+        "compiled se3_lie: a general stiffness K read as its diagonal",
+        SE3_KERNEL_TESTS,
+    ),
+    Mutation(
+        "E2",
+        SE3_KERNEL,
+        "            w += G[j, 6 + m] * V_tilde[m]",
+        "            w += G[j, 6 + m] * V_tilde[m] if j == m else 0.0",
+        "compiled se3_lie: a general A⁻¹D read as its diagonal",
+        SE3_KERNEL_TESTS,
+    ),
+    Mutation(
+        "E3",
+        SE3_KERNEL,
+        "                a[:] = base + floor.P.dot(a - base)",
+        "                pass",
+        "se3_lie lambda_space: the apparent-inertia floor not applied",
+        SE3_KERNEL_TESTS,
     ),
     # ------------------------------------------- the yielding friction feed-forward
     Mutation(

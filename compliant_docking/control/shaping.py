@@ -4,7 +4,66 @@ deviation from docs/control_laws.md §1 and §3, option ``apparent_inertia_floor
 from __future__ import annotations
 
 import numpy as np
-from scipy.linalg import lapack
+
+from compliant_docking.control.jit import kernel
+from compliant_docking.control.kernel_blocks import cholesky
+
+#: the floor's state, one record: W^½, W^-½ and ratio (constant), [P, I] (6×12, P refreshed
+#: in its left block), whether P is in force, the largest σ seen
+FLOOR_STATE = np.dtype(
+    [
+        ("w_sqrt", "f8", (6,)),
+        ("w_isqrt", "f8", (6,)),
+        ("ratio", "f8"),
+        ("P_and_I", "f8", (6, 12)),
+        ("active", "?"),
+        ("max_ratio", "f8"),
+    ],
+    align=True,
+)
+
+
+@kernel
+def refresh_floor(lam_inv, floor):
+    """Recompute P = W_eff⁻¹W for Λ⁻¹ = ``lam_inv`` into ``floor[0]`` (a :data:`FLOOR_STATE`
+    record): ``P_and_I``'s left block and ``active`` (False when W ⪰ ratio·Λ already).
+
+    The one implementation, called by :class:`ApparentInertiaFloor` (the numpy laws) and
+    by the compiled SE(3) step (:mod:`~.se3_kernel`). A 6×6 Cholesky of W^½Λ⁻¹W^½ − ratio·I
+    tells whether every 1/σ > ratio (nothing to do); else numba's ``np.linalg.eigh``
+    (LAPACK ``dsyevd``) gives V and μ = 1/σ of T = W^½Λ⁻¹W^½ and
+    P = W^-½ V diag(min(1, μ/ratio)) Vᵀ W^½."""
+    f = floor[0]
+    w_sqrt, w_isqrt, ratio = f.w_sqrt, f.w_isqrt, f.ratio
+    T = np.empty((6, 6))  # W^½ Λ⁻¹ W^½, transposed (its lower triangle holds Λ⁻¹'s upper one)
+    U = np.empty((6, 6))
+    for i in range(6):
+        for j in range(6):
+            T[j, i] = lam_inv[i, j] * (w_sqrt[i] * w_sqrt[j])
+            U[j, i] = T[j, i] - ratio if i == j else T[j, i]
+    if cholesky(U, np.empty((6, 6))):  # every 1/σ > ratio: nothing to do
+        f.active = False
+        return
+    if not np.all(np.isfinite(T)):  # (an eigen-solver's failure: P None)
+        f.active = False
+        return
+    mu, V = np.linalg.eigh(T)
+    if mu[0] <= 0.0:
+        f.active = False
+        return
+    f.max_ratio = max(f.max_ratio, 1.0 / mu[0])
+    inv_ratio = 1.0 / ratio
+    c = np.empty(6)
+    for m in range(6):
+        c[m] = min(mu[m] * inv_ratio, 1.0)  # min(1, (1/ratio)/σ)
+    P = f.P_and_I
+    for i in range(6):
+        for j in range(6):
+            s = 0.0
+            for m in range(6):
+                s += (w_isqrt[i] * V[i, m] * c[m]) * (V[j, m] * w_sqrt[j])
+            P[i, j] = s
+    f.active = True
 
 
 class ApparentInertiaFloor:
@@ -24,53 +83,56 @@ class ApparentInertiaFloor:
     The controller hands :meth:`apply` the vector W⁻¹u (u: the impedance wrench) and gets
     W_eff⁻¹u back, i.e. P·W⁻¹u with P = W_eff⁻¹W = W^-½ V diag(min(1, 1/(ratio·σ))) Vᵀ W^½.
     P is refreshed every ``every`` steps (Λ follows the posture, slowly: at 1 kHz ten steps
-    are 10 ms, as for TaskInertia's conditioning check): one 6×6 Cholesky of
-    W^½Λ⁻¹W^½ − ratio·I tells whether W ⪰ ratio·Λ already (then P = I and the vector is
-    returned untouched, so the law is exactly the specified one), else one LAPACK
-    ``dsyevd`` gives V and σ. Between refreshes a step costs at most one 6×6 product.
-    ``ratio`` > 0: the range of ``controller.apparent_inertia_floor``, which the
-    controllers check.
+    are 10 ms, as for TaskInertia's conditioning check) by :func:`refresh_floor` (compiled):
+    one 6×6 Cholesky of W^½Λ⁻¹W^½ − ratio·I tells whether W ⪰ ratio·Λ already (then P = I
+    and the vector is returned untouched, so the law is exactly the specified one), else one
+    symmetric eigen-decomposition gives V and σ. Between refreshes a step costs at most one
+    6×6 product. ``ratio`` > 0: the range of ``controller.apparent_inertia_floor``, which
+    the controllers check.
+
+    The state (:data:`FLOOR_STATE`) is one record, ``state``, that the compiled SE(3) step
+    refreshes in place as well (then :meth:`take_refresh` reads it).
     """
 
     def __init__(self, W_diag, ratio: float, every: int = 10):
         W = np.asarray(W_diag, dtype=float)
+        self.state = np.zeros(1, FLOOR_STATE)
+        s = self.state[0]
+        s["w_sqrt"] = np.sqrt(W)
+        s["w_isqrt"] = 1.0 / s["w_sqrt"]
+        s["ratio"] = float(ratio)
+        s["P_and_I"][:, 6:] = np.eye(6)
         self.ratio = float(ratio)
         self.every = int(every)
-        self._w_sqrt = np.sqrt(W)
-        self._w_isqrt = 1.0 / self._w_sqrt
-        self._scale = np.outer(self._w_sqrt, self._w_sqrt)
-        self._shift = self.ratio * np.eye(len(W))
         self.P: np.ndarray | None = None  # W_eff⁻¹W, None while the floor is inactive
-        # [P, I] (6×12), refreshed with P: P·d + y in one product, [P, I]·[d; y]
-        self.P_and_I = np.hstack([np.zeros((len(W), len(W))), np.eye(len(W))])
         self._step = 0
         self.active_steps = 0
-        self.max_ratio = 0.0  # largest σ = eig(W^-½ Λ W^-½) seen while active
+        refresh_floor(np.eye(6), self.state.copy())  # load (or compile) it now, not in the loop
+
+    @property
+    def W_sqrt(self) -> np.ndarray:
+        """W^½ (the diagonal)."""
+        return self.state["w_sqrt"][0]
+
+    @property
+    def max_ratio(self) -> float:
+        """The largest σ = eig(W^-½ Λ W^-½) seen while active."""
+        return float(self.state["max_ratio"][0])
 
     def refresh(self, lam_inv: np.ndarray) -> None:
         """Recompute P for Λ⁻¹ = ``lam_inv`` (None when W ⪰ ratio·Λ already)."""
-        T = lam_inv * self._scale  # W^½ Λ⁻¹ W^½ = S⁻¹, eigenvalues 1/σ
-        if lapack.dpotrf(T - self._shift)[1] == 0:  # every 1/σ > ratio: nothing to do
-            self.P = None
-            return
-        mu, V, info = lapack.dsyevd(T)
-        if info != 0 or mu[0] <= 0.0:
-            self.P = None
-            return
-        self.max_ratio = max(self.max_ratio, 1.0 / mu[0])
-        c = np.minimum(mu * (1.0 / self.ratio), 1.0)  # min(1, (1/ratio)/σ)
-        self.P = (self._w_isqrt[:, None] * V * c).dot(V.T * self._w_sqrt)
-        self.P_and_I[:, : len(c)] = self.P
+        refresh_floor(lam_inv, self.state)
+        self.take_refresh()
+
+    def take_refresh(self) -> None:
+        """Read the state a refresh left (here or in the compiled SE(3) step): P is
+        ``P_and_I``'s left block, or None when inactive."""
+        s = self.state[0]
+        self.P = s["P_and_I"][:, :6].copy() if s["active"] else None
 
     def due(self) -> bool:
         """Whether this step refreshes P (every ``every`` steps)."""
         return self._step % self.every == 0
-
-    def refreshed_elsewhere(self, active: bool, max_ratio: float) -> None:
-        """Take the result of a refresh computed elsewhere (se3_lie's compiled step), which
-        wrote P into ``P_and_I``'s left block: P is that block, or None when inactive."""
-        self.P = self.P_and_I[:, : len(self._w_sqrt)].copy() if active else None
-        self.max_ratio = max_ratio
 
     def count_step(self) -> None:
         """The step's bookkeeping, once its P is current."""
@@ -94,7 +156,7 @@ class ApparentInertiaFloor:
     def diagnostics(self) -> dict:
         return {
             "inertia_floor_active_steps": self.active_steps,
-            "inertia_floor_max_ratio": float(self.max_ratio) if self.active_steps else None,
+            "inertia_floor_max_ratio": self.max_ratio if self.active_steps else None,
         }
 
 

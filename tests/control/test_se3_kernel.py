@@ -1,16 +1,16 @@
-"""``controller=se3_lie``'s compiled step (control/se3_kernel.py) against the numpy evaluations
-it replaces, and its twins of numpy pieces other laws use.
+"""``controller=se3_lie``'s compiled step (control/se3_kernel.py) against the numpy reference
+(tests/control/se3_reference.py) and against its own λ-space finish.
 
 Tolerances:
-* twins (friction feed-forward, the Cholesky solve) against the numpy/LAPACK pieces: 1e-12
-  relative: the same formulas, summed in another order (6×6 with condition ≤ ~1e3: round-off
-  ~1e-13 relative);
-* the compiled twist step against ``formulation=lambda_space`` (the literal law in numpy, the
-  same controller otherwise): 1e-9 relative, the literal-law tolerance of test_se3_lie.py (the
+* the kernel against the numpy reference: 1e-10 relative: the same formulas, products summed
+  in another order and Λ applied by another solve (condition ≤ ~1e4: round-off ~1e-12);
+* the twist formulation against ``formulation=lambda_space`` (the literal law's λ-space route
+  on the kernel's prelude): 1e-9 relative, the literal-law tolerance of test_se3_lie.py (the
   two evaluate the law by different formulas);
 * diagnostics that count steps: equal.
 """
 
+import copy
 import math
 
 import numpy as np
@@ -21,9 +21,10 @@ from omegaconf import OmegaConf
 from compliant_docking.config import FrictionComp
 from compliant_docking.control import se3_kernel
 from compliant_docking.control.se3_lie import SE3LieController
-from compliant_docking.control.shaping import ApparentInertiaFloor
 from compliant_docking.planning.base import Reference
 from compliant_docking.sim import simulate
+from tests.control.se3_reference import floor_P, reference_step
+from tests.control.test_se3_lie import random_case, random_spd
 from tests.helpers import make_cfg
 
 FR3 = ("robot=fr3", "controller=se3_lie", "task.progress=false")
@@ -61,12 +62,12 @@ def _case(arm, rng, angle, axis=None):
 
 def test_compiled_step_matches_lambda_space_on_the_fr3(monkeypatch):
     """25 steps on random states: full compiled steps and the staged ones (TaskInertia's check,
-    the floor's refresh: steps 0, 10, 20) give λ̈-space's torques; the integral, the floor and
-    the conditioning diagnostics evolve alike."""
+    the floor's refresh: steps 0, 10, 20) give the torques of the λ-space finish (every step
+    staged); the integral, the floor and the conditioning diagnostics evolve alike."""
     sim = simulate.prepare(make_cfg(*FR3))
     arm = sim.scene.arm
     fast, slow = _pair(sim)
-    assert fast._kernel is not None and slow._kernel is None
+    assert fast._kernel.lambda_finish is None and slow._kernel.lambda_finish is not None
     modes = []
     step = se3_kernel.step
     monkeypatch.setattr(se3_kernel, "step", lambda mode, *a: modes.append(mode) or step(mode, *a))
@@ -75,10 +76,11 @@ def test_compiled_step_matches_lambda_space_on_the_fr3(monkeypatch):
         ref, wrench = _case(arm, rng, rng.uniform(0.0, 1.2))
         tau = fast.compute(0.001 * k, arm, ref, wrench)
         assert close(tau, slow.compute(0.001 * k, arm, ref, wrench), REL), k
+        assert slow.lam_ddot_ref is not None  # the λ-space finish ran
         for name in ("lam", "V_tilde", "F_tilde", "Vdot_ref"):
             assert close(getattr(fast, name), getattr(slow, name), REL), (k, name)
-    staged = [k for k, m in enumerate(modes) if m == se3_kernel.STAGE]
-    assert staged == [0, 10, 20]
+    staged = [k for k, m in enumerate(modes[0::2]) if m == se3_kernel.STAGE]  # the twist's calls
+    assert staged == [0, 10, 20] and set(modes[1::2]) == {se3_kernel.STAGE}
     assert fast.inertia_floor.active_steps == slow.inertia_floor.active_steps > 0
     assert fast.integral.state == pytest.approx(slow.integral.state, rel=1e-12)
     assert fast.integral.rot_state == pytest.approx(slow.integral.rot_state, rel=1e-12)
@@ -128,23 +130,59 @@ def test_domain_errors_keep_their_messages():
         fast.compute(0.5, arm, *_case(arm, rng, math.pi, axis))
 
 
-def test_floor_refresh_twin_matches_the_numpy_floor():
-    rng = np.random.default_rng(9)
-    W = np.array([2.0, 2.0, 2.0, 0.2, 0.2, 0.2])
-    active_seen = set()
-    for ratio in (0.05, 0.75, 3.0):
-        for _ in range(20):
-            B = rng.standard_normal((6, 6)) * np.r_[[0.7] * 3, [3.0] * 3]
-            lam_inv = B @ B.T + 0.05 * np.eye(6)
-            floor = ApparentInertiaFloor(W, ratio)
-            floor.refresh(lam_inv)
-            PI, mem = np.zeros((6, 12)), np.zeros(se3_kernel.mem_size(7))
-            active = se3_kernel.floor_refresh(lam_inv, floor._w_sqrt, floor._w_isqrt, ratio, PI, mem)
-            assert active == (floor.P is not None)
-            active_seen.add(active)
-            if active:  # P to 1e-12; σ_max = 1/μ_min, μ_min to eps·cond(T) relative (Weyl)
-                assert close(PI[:, :6], floor.P, 1e-12)
-                cond = np.linalg.cond(lam_inv * np.outer(floor._w_sqrt, floor._w_sqrt))
-                rel = 1e-12 + 1e-15 * cond
-                assert mem[se3_kernel.FLOOR_MAX_RATIO] == pytest.approx(floor.max_ratio, rel=rel)
-    assert active_seen == {False, True}  # both outcomes of the positive-definiteness test
+@pytest.mark.parametrize("gains", ["diagonal", "general"])
+def test_kernel_matches_the_numpy_reference(gains):
+    """The compiled step against the numpy twist step (tests/control/se3_reference.py) on
+    random states, orientation errors in both coefficient branches and a desired wrench:
+    the FR3's friction feed-forward and integral action (position and orientation); diagonal
+    gains with the apparent-inertia floor, and general symmetric A, D, K (no floor: it needs a
+    diagonal A)."""
+    sim = simulate.prepare(make_cfg(*FR3))  # the FR3: joint friction, a feed-forward
+    arm = sim.scene.arm
+    rng = np.random.default_rng(5)
+    F_d = np.array([1.0, -2.0, 0.5, 0.1, 0.05, -0.2])
+    params = OmegaConf.to_container(sim.cfg.controller, resolve=True)
+    params.pop("_target_")
+    if gains == "diagonal":  # light enough for the floor to act on some states
+        A, D, K = np.diag([2.0, 2.5, 3.0, 0.2, 0.25, 0.3]), np.diag([40.0, 50.0, 60.0, 4.0, 5.0, 6.0]), None
+        extra = {"apparent_inertia_floor": 0.75, "friction_comp": FrictionComp.torque_unbiased}
+    else:
+        A = random_spd(rng, [10.0, 10.0, 10.0, 1.0, 1.0, 1.0])
+        D = random_spd(rng, [80.0, 80.0, 80.0, 10.0, 10.0, 10.0])
+        K = random_spd(rng, [50.0, 50.0, 50.0, 25.0, 25.0, 25.0])
+        extra = {"apparent_inertia_floor": None}
+    kwargs = {**params, **extra, "A": A, "D": D, "desired_wrench": F_d, "null_damping": 7.0}
+    if K is not None:
+        kwargs["K"] = K
+    ctrl = SE3LieController(sim.controller.ctx, **kwargs)
+    active, compared = [], 0
+    for k in range(24):
+        ref, wrench = random_case(arm, rng, (0.0, 1e-3, 0.3, 2.0)[k % 4])
+        wrench *= 0.1  # below the integral's freeze force (1 N): it integrates every step
+        # the integral wrench [F_i; M_i] of this step, from a copy of the integral action
+        F_i = copy.deepcopy(ctrl.integral).update_pose(ref.pos - arm.pos, wrench, ref.rot, arm.rot_T)
+        tau = ctrl.compute(0.0, arm, ref, wrench)
+        floor = ctrl.inertia_floor
+        P = None if floor is None else floor.P
+        want = reference_step(ctrl, arm, ref, wrench, F_i, P=P)
+        for name in ("lam", "V_tilde", "F_tilde", "Vdot_ref"):
+            assert close(getattr(ctrl, name), want[name], 1e-10), (k, name)
+        if np.linalg.cond(want_lam_inv(ctrl, arm)) < 1e6:  # a random posture may be near-singular
+            compared += 1
+            assert close(tau, want["tau"], 1e-10), k
+        if floor is not None and k % floor.every == 0:  # refreshed here: the numpy P
+            want_P = floor_P(ctrl, want_lam_inv(ctrl, arm))
+            assert (P is None) == (want_P is None), k
+            if P is not None:
+                assert close(P, want_P, 1e-10), k
+            active.append(P is not None)
+    assert compared >= 16
+    assert np.all(ctrl.integral.state) and np.all(ctrl.integral.torque)  # the integral acted
+    if gains == "diagonal":
+        assert ctrl.friction.active and True in active  # the floor acted on a refresh
+    assert not np.any(ctrl.K - np.diag(np.diag(ctrl.K))) == (gains == "diagonal")
+
+
+def want_lam_inv(ctrl, arm):
+    Jb = np.vstack([arm.rot_T @ arm.J[:3], arm.rot_T @ arm.J[3:]])
+    return Jb @ arm.Minv @ Jb.T

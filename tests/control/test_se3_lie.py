@@ -148,7 +148,6 @@ def test_controller_matches_the_literal_law(formulation, gains):
     for angle in (0.0, 1e-3, 0.05, 0.3, 1.0, 2.0, 3.0):  # Taylor and closed-form branches
         # a fresh controller per case: unrelated references are not a continuous motion
         ctrl = controller(sim, A=A, D=D, K=K, null_damping=b, desired_wrench=F_d, formulation=formulation)
-        assert ctrl.diagonal_gains == (gains == "diagonal")  # both code paths are exercised
         ref, wrench = random_case(arm, rng, angle)
         tau = ctrl.compute(0.0, arm, ref, wrench)
         lit = literal_law(arm, ref, wrench, A, D, K, b, F_d)

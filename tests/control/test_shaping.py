@@ -22,12 +22,35 @@ def _W_eff_inv(floor, lam):
     """W_eff⁻¹ as a matrix, from apply() (which maps W⁻¹u ↦ W_eff⁻¹u), with J = I so that
     Λ⁻¹ = J M⁻¹ Jᵀ = M⁻¹."""
     Minv = np.linalg.inv(lam)
-    W = floor._w_sqrt**2
+    W = floor.W_sqrt**2
     columns = []
     for e in np.eye(6):
         floor._step = 0  # refresh on this call
         columns.append(floor.apply(np.eye(6), Minv, e / W))
     return np.column_stack(columns)
+
+
+def test_the_compiled_refresh_is_the_eigen_decomposition_of_its_definition():
+    """P = W^-½ V diag(min(1, μ/ratio)) Vᵀ W^½ with μ, V of W^½Λ⁻¹W^½ (numpy's eigh), None
+    where every μ > ratio, on random task inertias: 1e-12 (6×6, condition ≤ ~1e3); the largest
+    σ = 1/μ_min to eps·cond relative (Weyl)."""
+    rng = np.random.default_rng(9)
+    W = np.array([2.0, 2.0, 2.0, 0.2, 0.2, 0.2])
+    seen = set()
+    for ratio in (0.05, 0.75, 3.0):
+        for _ in range(20):
+            B = rng.standard_normal((6, 6)) * np.r_[[0.7] * 3, [3.0] * 3]
+            lam_inv = B @ B.T + 0.05 * np.eye(6)
+            floor = ApparentInertiaFloor(W, ratio)
+            floor.refresh(lam_inv)
+            mu, V = np.linalg.eigh(lam_inv * np.outer(np.sqrt(W), np.sqrt(W)))
+            seen.add(floor.P is not None)
+            assert (floor.P is None) == (mu[0] > ratio)
+            if floor.P is not None:
+                want = (V * np.minimum(mu / ratio, 1.0) / np.sqrt(W)[:, None]) @ (V.T * np.sqrt(W))
+                assert np.abs(floor.P - want).max() <= 1e-12 * np.abs(want).max()
+                assert floor.max_ratio == pytest.approx(1.0 / mu[0], rel=1e-12 + 1e-15 * mu[-1] / mu[0])
+    assert seen == {False, True}  # both outcomes of the positive-definiteness test
 
 
 @pytest.mark.parametrize("seed", range(5))
