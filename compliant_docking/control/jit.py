@@ -32,8 +32,9 @@ numba offers no public API for any of this: :func:`_checked_cache` is the one pl
 uses its private cache objects, and raises a clear error when they change
 (tests/control/test_jit.py fails first; numba is pinned below 0.70 in pyproject.toml).
 
-numba is imported with the controller module that uses it, never by a run that does not
-(the default impedance run does not).
+Every run imports numba: every controller calls compiled laws (the friction feed-forward
+and the integral action of control/base.py, the apparent-inertia floor's refresh, and the
+HQP and SE(3) steps), each loaded or compiled when its controller is built.
 """
 
 from __future__ import annotations
