@@ -68,6 +68,18 @@ def test_no_effect_is_said_to_be_no_significant_difference(tmp_path):
     assert "**not reproduced**" in text  # −81 % lies far outside an interval around 0
 
 
+def test_the_fr3_docking_time_carries_its_timestep_caveat(tmp_path):
+    """The FR3's docking-time difference is not converged in the timestep (docs/contact.md,
+    "Convergence"): the answer says so beside the number, and only for the FR3."""
+    df = sweep(12)
+    answer = findings_markdown(df, tmp_path).split("## Design")[0]
+    _, caveat = answer.split("**Cost in docking time**")[1].split("\n")[:2]
+    assert "not converged in the timestep" in caveat and "p 0.75" in caveat
+    assert "0.5–0.9 s" in caveat and "docs/contact.md" in caveat
+    iiwa = findings_markdown(df, tmp_path, robot="iiwa14").split("## Design")[0]
+    assert "not converged in the timestep" not in iiwa
+
+
 def test_the_command_refuses_a_sweep_without_the_controllers(tmp_path, capsys):
     (tmp_path / "empty").mkdir()
     with pytest.raises(SystemExit):
