@@ -83,8 +83,8 @@ def test_every_controller_robot_and_planner_docks_into_the_same_sockets():
     ]
     for seed in (0, 7):
         poses = set()
-        for misalignment in composed:
-            poses.add(draw_settings(dataclasses.replace(misalignment, seed=seed)))
+        for cell in composed:
+            poses.add(draw_settings(dataclasses.replace(cell, seed=seed)))
         assert len(poses) == 1, poses
         [pose] = poses
         assert pose == draw({**preset("controller_comparison")[1], "seed": seed})
