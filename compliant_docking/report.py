@@ -31,6 +31,7 @@ from compliant_docking import exit_codes
 from compliant_docking.results.load import RunSkippedWarning, scan
 from compliant_docking.results.summary import write_summary
 from compliant_docking.results.tables import counts
+from compliant_docking.run.directories import write_problem
 from compliant_docking.run.rundir import read_metrics
 
 
@@ -88,10 +89,10 @@ def _main(argv: list[str] | None) -> int:
         print(f"report: no finished runs under {path}", file=sys.stderr)
         return exit_codes.REFUSED
     out = args.out or (path if path.is_dir() else path.parent)
-    problem = _unwritable(out)
+    problem = write_problem(out)
     if problem:
         print(
-            f"report: cannot write into {out} ({problem}); write the tables and figures "
+            f"report: cannot write into {out}: {problem}; write the tables and figures "
             "elsewhere with --out DIR",
             file=sys.stderr,
         )
@@ -144,25 +145,6 @@ def _figures(frame, out_dir: Path, formats) -> list[Path]:
     from compliant_docking.results.figures import plot_comparison
 
     return plot_comparison(frame, out_dir, formats)
-
-
-def _unwritable(out: Path) -> str | None:
-    """Why nothing can be written into ``out`` (or the folder that would hold it), or None.
-    Tried for real with a probe file: permission bits do not tell for root or a
-    read-only file system."""
-    import tempfile
-
-    existing = out
-    while not existing.exists() and existing != existing.parent:
-        existing = existing.parent
-    if not existing.is_dir():
-        return f"{existing} is not a directory"
-    try:
-        with tempfile.NamedTemporaryFile(dir=existing, prefix=".report-probe-"):
-            pass
-    except OSError as exc:
-        return exc.strerror or str(exc)
-    return None
 
 
 if __name__ == "__main__":

@@ -136,23 +136,26 @@ def release_empty() -> None:
 
 
 def _writable(path: Path, key: str) -> str | None:
-    """Why ``path`` (existing, or to be created) cannot be written, or None. Tried for real
-    (a probe directory created and removed in ``path`` or its nearest existing parent):
-    permission bits do not tell for root or a read-only file system."""
+    """Why the directory setting ``key`` = ``path`` cannot be written, as a refusal, or None."""
+    problem = write_problem(path)
+    return None if problem is None else f"{key}={path}: {problem}; choose another directory with {key}=<dir>."
+
+
+def write_problem(path: Path) -> str | None:
+    """Why nothing can be written at ``path`` (existing, or to be created), or None. Tried
+    for real (a probe directory created and removed in ``path`` or its nearest existing
+    parent): permission bits do not tell for root or a read-only file system."""
     import tempfile
 
     existing = path
     while not existing.exists() and existing != existing.parent:
         existing = existing.parent
     if not existing.is_dir():
-        return f"{key}={path}: {existing} is not a directory; choose another directory with {key}=<dir>."
+        return f"{existing} is not a directory"
     try:
         os.rmdir(tempfile.mkdtemp(prefix=".write-probe-", dir=existing))
     except OSError as exc:
-        return (
-            f"{key}={path}: cannot write in {existing} ({exc.strerror or exc}); "
-            f"choose another directory with {key}=<dir>."
-        )
+        return f"cannot write in {existing} ({exc.strerror or exc})"
     return None
 
 

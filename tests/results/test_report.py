@@ -51,10 +51,10 @@ def test_report_on_a_directory_it_cannot_write_suggests_out(two_runs, tmp_path, 
     blocker.write_text("")
     assert report([str(two_runs), "--out", str(blocker / "out"), "--no-figures"]) == 2
     err = capsys.readouterr().err
-    assert f"report: cannot write into {blocker / 'out'} ({blocker} is not a directory)" in err
+    assert f"report: cannot write into {blocker / 'out'}: {blocker} is not a directory;" in err
     assert "elsewhere with --out DIR" in err and "Traceback" not in err
     assert report([str(two_runs), "--out", "/proc/report", "--no-figures"]) == 2
-    assert "report: cannot write into /proc/report" in capsys.readouterr().err
+    assert "report: cannot write into /proc/report: cannot write in /proc (" in capsys.readouterr().err
     # a directory that refuses writes (what a read-only sweep gives a non-root user)
     from compliant_docking import report as module
 
