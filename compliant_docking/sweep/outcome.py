@@ -75,6 +75,7 @@ def summarise(
     # every job directory ends with a metrics.json — except on submitit, whose jobs are
     # processes of their own that may still be running (they write theirs when done)
     if aborted and sweep_dir.is_dir() and not independent_jobs:
+        remove_unstarted_job_dirs(sweep_dir)
         for job_dir in scan(sweep_dir)[1]:
             record_orphan(job_dir)
     if sweep_dir.is_dir():
@@ -194,6 +195,31 @@ ORPHAN_ERROR = (
     "worker process died, e.g. a segmentation fault in it or in a sibling job, "
     "or the sweep was interrupted: Ctrl-C, SIGTERM); resume=<sweep dir> reruns it"
 )
+
+
+def remove_unstarted_job_dirs(sweep_dir: Path) -> list[Path]:
+    """Remove the empty directories of jobs whose worker was killed between creating the
+    job's directory and writing its ``.hydra/`` (a window of Hydra's job start): nothing of
+    the job exists yet, so it is a job that never started (counted as missing, and a resume
+    runs it), not a job directory without a record. Only a ``<job number>_…`` folder of
+    ``sweep_dir`` with no file anywhere below it is removed (an empty ``.hydra/``
+    included; ``os.rmdir`` never removes anything else); returns the folders removed."""
+    import re
+
+    removed = []
+    for top in sorted(sweep_dir.iterdir()):
+        if not (top.is_dir() and re.match(r"\d+_", top.name)):
+            continue
+        tree = list(os.walk(top, topdown=False))
+        if any(files for _, _, files in tree):  # something of the job exists: kept
+            continue
+        for current, _, _ in tree:  # bottom-up: every folder empty by the time it is reached
+            try:
+                Path(current).rmdir()
+                removed.append(Path(current))
+            except OSError:  # written meanwhile (or not ours to remove): kept
+                pass
+    return removed
 
 
 def record_orphan(job_dir: Path) -> None:

@@ -413,3 +413,29 @@ def test_an_aborted_submitit_sweep_writes_no_orphan_records(tmp_path):
     outcome = session.finish_aborted()
     assert outcome.aborted and outcome.exit_status == 1 and outcome.unfinished == 1
     assert not (job / "metrics.json").exists()
+
+
+def test_an_aborted_sweep_removes_the_empty_directory_of_a_job_that_never_started(tmp_path):
+    """A worker killed between creating its job's directory and writing ``.hydra/`` leaves
+    an empty directory: removed (a job that never started), so every job directory that
+    stays ends with a metrics.json; anything with a file in it is kept and recorded."""
+    done, lost = tmp_path / "0_done", tmp_path / "1_lost"
+    never, nested = tmp_path / "2_never", tmp_path / "3_a" / "b"
+    (done / ".hydra").mkdir(parents=True)
+    (done / "metrics.json").write_text('{"status": "ok", "success": true}')
+    (lost / ".hydra").mkdir(parents=True)
+    (lost / ".hydra" / "overrides.yaml").write_text("- task.stroke=[0,0,-0.1]\n")
+    (never / ".hydra").mkdir(parents=True)  # Hydra made .hydra/ and was killed before its files
+    nested.mkdir(parents=True)
+    (tmp_path / "comparison").mkdir()  # not a job's folder: left alone
+    assert sweep_outcome.remove_unstarted_job_dirs(tmp_path) == [
+        never / ".hydra",
+        never,
+        nested,
+        nested.parent,
+    ]
+    sweep_outcome.summarise(tmp_path, aborted=True, figures=False, total=4)
+    jobs = sorted(p.name for p in tmp_path.iterdir() if p.is_dir() and p.name[0].isdigit())
+    assert jobs == ["0_done", "1_lost"] and (tmp_path / "comparison").is_dir()
+    assert all((tmp_path / job / "metrics.json").is_file() for job in jobs)
+    assert json.loads((lost / "metrics.json").read_text())["interrupted"] is True
