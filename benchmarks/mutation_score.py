@@ -84,7 +84,6 @@ LAW_TESTS = (
     "tests/sim/test_robots.py",
 )
 PROVENANCE_TESTS = ("tests/run/test_provenance.py",)
-CLI_TESTS = ("tests/run/test_cli.py",)
 RESULTS_TESTS = ("tests/results/test_load.py",)
 
 
@@ -1539,7 +1538,7 @@ MUTATIONS = (
         "NOT_DOCKED = 3",
         "NOT_DOCKED = 1",
         "a gate failure exits 1",
-        CLI_TESTS,
+        ("tests/test_exit_codes.py",),
     ),
 )
 

@@ -68,11 +68,11 @@ def test_a_failed_run_exits_1_and_an_undocked_one_3(tmp_path, monkeypatch, capsy
     stroke, far from the seat."""
     monkeypatch.chdir(tmp_path)
     code, _ = cli_in_process(capsys, *SHORT, f"hydra.run.dir={tmp_path / 'far'}", "target.pos=[3.0,0.0,0.2]")
-    assert code == exit_codes.FAILED
+    assert code == exit_codes.FAILED == 1  # the documented number, not only the name
     far = json.loads((tmp_path / "far" / "metrics.json").read_text())
     assert far["status"] == "failed" and "inverse kinematics" in far["error"]
     code, _ = cli_in_process(capsys, *SHORT, f"hydra.run.dir={tmp_path / 'short'}")
-    assert code == exit_codes.NOT_DOCKED
+    assert code == exit_codes.NOT_DOCKED == 3
     short = json.loads((tmp_path / "short" / "metrics.json").read_text())
     assert short["status"] == "ok" and short["success"] is False
     assert short["gate_failures"].startswith("not seated: ")
