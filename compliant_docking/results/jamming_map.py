@@ -26,8 +26,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+import compliant_docking.results.figures.common as common
 from compliant_docking.evaluation.map_boundaries import MapBoundaries
-from compliant_docking.results.figures import common
 from compliant_docking.results.load import load_runs
 from compliant_docking.results.stats import wilson
 

@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from compliant_docking.results.figures import common
+import compliant_docking.results.figures.common as common
 from compliant_docking.results.load import RunSkippedWarning
 from compliant_docking.results.tables import FAILED_STATUSES, configuration_labels
 from compliant_docking.run import rundir

@@ -12,8 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
+import compliant_docking.results.figures.common as common
 from compliant_docking.evaluation.insertion_statics import TWO_POINT, WEDGED, InsertionCurve
-from compliant_docking.results.figures import common
 
 #: forces below this [N] are drawn on a linear scale, above it logarithmically (a panel whose
 #: forces stay below ten times this is linear throughout)

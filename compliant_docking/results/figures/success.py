@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from compliant_docking.results.figures import common
+import compliant_docking.results.figures.common as common
 from compliant_docking.results.stats import wilson
 from compliant_docking.results.tables import configuration_keys
 
