@@ -70,7 +70,14 @@ def _ok_jobs(sweep_dir: Path) -> list[Path]:
 
 
 def _running(sweep_dir: Path) -> list[Path]:
-    return [p.parent for p in sweep_dir.glob("*/.hydra") if not (p.parent / "metrics.json").exists()]
+    """Jobs inside their run: Hydra has written a file of ``.hydra/``, and no metrics.json
+    exists yet. An empty ``.hydra/`` is not enough: a job killed there never started (an
+    aborted sweep removes its directory, and it counts as missing, not as unfinished)."""
+    return [
+        p.parent
+        for p in sweep_dir.glob("*/.hydra")
+        if any(f.is_file() for f in p.iterdir()) and not (p.parent / "metrics.json").exists()
+    ]
 
 
 def _mtimes(job_dir: Path) -> dict[str, int]:
