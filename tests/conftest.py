@@ -2,46 +2,103 @@
 
 from __future__ import annotations
 
+import fcntl
+import os
 import subprocess
 import sys
+import tempfile
 import warnings
+from pathlib import Path
 
 import pytest
 
-#: compile one law's numba kernel (control/jit.py) by running a few steps of it
+#: compile the laws' numba kernels (control/jit.py) by running a few steps of each law named
+#: on the command line, one after the other
 _WARM = (
     "import sys\n"
     "from compliant_docking.config import load_config\n"
     "from compliant_docking.sim.simulate import prepare\n"
-    "prepare(load_config(f'controller={sys.argv[1]}', 'task.duration=0.005', 'task.progress=false')).run()\n"
+    "for law in sys.argv[1:]:\n"
+    "    prepare(load_config(f'controller={law}', 'task.duration=0.005', 'task.progress=false')).run()\n"
 )
+#: two processes, for two cores: hqp's kernels take longest to compile
+_WARM_LAWS = (("hqp",), ("se3_lie", "impedance"))
+#: the lock file the compiling processes hold until the last one is done (set for xdist's workers)
+WARM_LOCK = "COMPLIANT_DOCKING_TESTS_KERNEL_LOCK"
+#: tests that build no controller: they run first, while the kernels compile
+_NO_KERNEL = ("tests/config/", "tests/test_layout.py", "tests/test_references.py", "tests/test_readme.py")
 
 
 def pytest_configure(config) -> None:
-    """Compile the compiled laws' kernels once, before pytest-xdist starts its workers.
+    """Compile the compiled laws' kernels once, beside pytest-xdist's workers.
 
     numba caches a kernel's machine code on first use (``__pycache__``), but on a fresh
-    clone every process that reaches se3_lie or hqp before the cache exists compiles them
-    itself: each xdist worker, and each command-line run and sweep worker the tests start
-    (20-75 s for hqp on a shared 2-core machine). Here the two kernels compile side by
-    side in two processes and every later process loads them. Only for a distributed run
-    (``-n``): a single targeted test pays nothing when the cache is warm.
+    clone every process that reaches a law before the cache exists compiles it itself:
+    each xdist worker, and each command-line run and sweep worker the tests start (20-75 s
+    for hqp on a shared 2-core machine). Here the kernels compile in two processes that
+    start before the workers; the workers collect meanwhile and run the tests that build no
+    controller (:data:`_NO_KERNEL`, ordered first), and every other test waits until the
+    compiling processes have exited (:func:`_kernels_compiled`), then loads the cache. Only
+    for a distributed run (``-n``): a single targeted test pays nothing when the cache is warm.
     """
     if hasattr(config, "workerinput") or config.getoption("collectonly", False):
         return  # an xdist worker (the controller did it), or nothing will run
-    workers = config.getoption("numprocesses", None)
-    if not workers:
+    if not config.getoption("numprocesses", None):
         return
-    procs = [
-        subprocess.Popen(
-            [sys.executable, "-c", _WARM, law], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE
+    handle, lock = tempfile.mkstemp(prefix="compliant-docking-kernels-", suffix=".lock")
+    fcntl.flock(handle, fcntl.LOCK_EX)  # held by the children's copies until the last exits
+    procs = []
+    for laws in _WARM_LAWS:
+        log = tempfile.TemporaryFile()
+        procs.append(
+            (
+                subprocess.Popen(
+                    [sys.executable, "-c", _WARM, *laws],
+                    stdout=subprocess.DEVNULL,
+                    stderr=log,
+                    pass_fds=(handle,),
+                ),
+                log,
+            )
         )
-        for law in ("hqp", "se3_lie")
-    ]
-    for proc in procs:
-        _, err = proc.communicate(timeout=900)
-        if proc.returncode:  # the tests of that law will report it; say why here too
-            sys.stderr.write(f"compiling a kernel before the workers failed:\n{err.decode()[-2000:]}\n")
+    os.close(handle)
+    os.environ[WARM_LOCK] = lock  # the workers start after this hook and inherit it
+    config.stash[_warm_key] = (lock, procs)
+
+
+_warm_key = pytest.StashKey[tuple]()
+
+
+def pytest_unconfigure(config) -> None:
+    """Reap the compiling processes; say why one failed (the tests of that law report it)."""
+    if _warm_key not in config.stash:
+        return
+    lock, procs = config.stash[_warm_key]
+    for proc, log in procs:
+        if proc.wait() != 0:
+            log.seek(0)
+            sys.stderr.write(
+                f"compiling the kernels before the tests failed:\n{log.read().decode()[-2000:]}\n"
+            )
+        log.close()
+    os.environ.pop(WARM_LOCK, None)
+    Path(lock).unlink(missing_ok=True)
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_runtest_setup(item) -> None:
+    """A test that may build a controller waits for the compiling processes before any of
+    its fixtures (a module's sweep) is set up; once they are done the lock is free at once."""
+    lock = os.environ.get(WARM_LOCK)
+    if lock and not item.nodeid.startswith(_NO_KERNEL):
+        try:
+            handle = os.open(lock, os.O_RDONLY)
+        except FileNotFoundError:  # the session is over
+            return
+        try:
+            fcntl.flock(handle, fcntl.LOCK_SH)
+        finally:
+            os.close(handle)
 
 
 #: fixtures that build something expensive once per session (a CAD conversion, a sweep) or
@@ -66,6 +123,7 @@ def pytest_collection_modifyitems(config, items) -> None:
     a module-scoped one). First among the hooks: an xdist worker's own hook reads the groups
     (it suffixes each grouped test's id with its group) and runs before this one otherwise,
     as conftest files register before the worker's plugin, so no test was ever grouped."""
+    items.sort(key=lambda item: not item.nodeid.startswith(_NO_KERNEL))  # stable: run while compiling
     for item in items:
         used = getattr(item, "fixturenames", ())
         group = next((name for name in SESSION_FIXTURES if name in used), None)

@@ -21,6 +21,13 @@ REPO_ROOT = Path(__file__).resolve().parents[1]
 make_cfg = load_config
 
 
+def per_option(options: list[tuple[str, str]]) -> list:
+    """``(group, option)`` cells for ``parametrize``, each in the xdist group of its option:
+    the tests of every file that compose one option run in one worker, where the
+    composition memo (config/hydra_adapter.py) composes it once."""
+    return [pytest.param(g, o, marks=pytest.mark.xdist_group(f"option:{g}={o}")) for g, o in options]
+
+
 def misalignment(**given):
     """``task.misalignment`` as the simulation gets it (the schema's ``MisalignmentConfig``):
     the default config's (nothing misaligned) with the settings ``given``."""

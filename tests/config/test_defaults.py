@@ -18,7 +18,7 @@ from omegaconf import MISSING, OmegaConf
 from compliant_docking import CONF_DIR
 from compliant_docking.config import env, geometry, keyed, schemas, tuning
 from compliant_docking.config.store import _SCHEMAS
-from tests.helpers import make_cfg
+from tests.helpers import make_cfg, per_option
 
 #: parameters a class may default: not config values (programmatic use only)
 PROGRAMMATIC = {"SE3LieController": {"A", "D", "K"}}
@@ -59,14 +59,16 @@ def _options() -> list[tuple[str, str]]:
 PAIRED = {("target", "keyed_socket"): ("tool=keyed_plug",)}
 
 
-@pytest.mark.parametrize(("group", "option"), _options())
+@pytest.mark.parametrize(("group", "option"), per_option(_options()))
 def test_every_option_sets_every_field_of_its_schema(group, option):
     cfg = make_cfg(f"{group}={option}", *PAIRED.get((group, option), ()))
     missing = sorted(OmegaConf.missing_keys(cfg[group]))
     assert not missing, f"conf/{group}/{option}.yaml leaves {missing} unset"
 
 
-@pytest.mark.parametrize(("group", "option"), [o for o in _options() if o[0] in ("controller", "trajectory")])
+@pytest.mark.parametrize(
+    ("group", "option"), per_option([o for o in _options() if o[0] in ("controller", "trajectory")])
+)
 def test_targets_take_every_parameter_from_the_config(group, option):
     node = make_cfg(f"{group}={option}")[group]
     cls = get_class(node._target_)

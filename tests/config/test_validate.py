@@ -26,7 +26,7 @@ from compliant_docking.config.memory import BYTES_PER_STEP, memory_problem
 from compliant_docking.config.ranges import Range, field_range, show
 from compliant_docking.config.store import _SCHEMAS, load_env_config
 from compliant_docking.config.validate import ConfigError, check, settings_problems, validate
-from tests.helpers import make_cfg
+from tests.helpers import make_cfg, per_option
 
 #: what an option needs beside it to make a config that runs (free-space options)
 COMPANIONS = {
@@ -135,39 +135,101 @@ def _bad_values(rng: Range) -> list[float]:
     return [math.nan, math.inf] + ([outside] if outside is not None else [])
 
 
-@pytest.mark.parametrize(("group", "option"), _options())
-def test_every_numeric_leaf_refuses_nan_inf_and_out_of_range(group, option):
+def _set(container, index, key: str, value, failures: list[str]) -> bool:
+    """Put ``value`` at ``container[index]``; an int field refuses NaN/inf/fractions at
+    assignment (as at composition), which must name the key: then False."""
+    try:
+        container[index] = value
+    except OmegaConfBaseException as exc:
+        if key.split("[")[0] not in str(exc):
+            failures.append(f"{key}={show(value)}: the type error does not name the key: {exc}")
+        return False
+    return True
+
+
+def _judge(key: str, value, bad: float, problems: list[str], failures: list[str]) -> None:
+    named = [p for p in problems if key.split("[")[0] in p]
+    if not named:
+        failures.append(f"{key}={show(value)}: not refused, or not by name: {problems}")
+    elif not any(show(bad) in p for p in named):
+        failures.append(f"{key}={show(value)}: the message does not show the value: {named}")
+
+
+def _refusals(group: str, option: str, one_at_a_time: bool) -> tuple[int, list[str]]:
+    """Set every numeric leaf of ``group`` to NaN, to inf and to a value just outside its
+    range, and collect what the check does not refuse by name with the value shown.
+
+    ``one_at_a_time``: one bad leaf per check (the rest of the config sound). Otherwise one
+    check per kind of bad value with every leaf bad at once: the range check walks every
+    leaf and reports each (a refusal lists every problem), so each leaf must still be named
+    with its own value. Every value is restored afterwards (checked)."""
     cfg = _baseline(group, option)
     assert _check(cfg, group) == [], (
         f"conf/{group}/{option}.yaml (with {COMPANIONS.get((group, option))}) is refused"
     )
-    failures, cases = [], 0
-    for key, container, index, rng, null_size in list(_leaves(cfg[group], group)):
-        saved = container._get_node(index)._value()  # raw: keeps an interpolation as it was
-        for bad in _bad_values(rng):
-            cases += 1
-            value = [bad] * null_size if null_size else bad
-            try:
-                container[index] = value
-            except OmegaConfBaseException as exc:  # an int field: refused as at composition
-                if key.split("[")[0] not in str(exc):
-                    failures.append(f"{key}={show(value)}: the type error does not name the key: {exc}")
+    leaves = list(_leaves(cfg[group], group))
+    saved = [container._get_node(index)._value() for _, container, index, _, _ in leaves]  # raw
+    failures: list[str] = []
+    cases = 0
+    for kind in range(3):  # NaN, inf, just outside
+        placed = []
+        for (key, container, index, rng, null_size), keep in zip(leaves, saved, strict=True):
+            bads = _bad_values(rng)
+            if kind >= len(bads):  # no value outside an unbounded range
                 continue
-            try:
-                problems = _check(cfg, group)
-            finally:
-                container[index] = saved
-            named = [p for p in problems if key.split("[")[0] in p]
-            if not named:
-                failures.append(f"{key}={show(value)}: not refused, or not by name: {problems}")
-            elif not any(show(bad) in p for p in named):
-                failures.append(f"{key}={show(value)}: the message does not show the value: {named}")
+            bad = bads[kind]
+            value = [bad] * null_size if null_size else bad
+            cases += 1
+            if not _set(container, index, key, value, failures):
+                continue
+            if one_at_a_time:
+                try:
+                    _judge(key, value, bad, _check(cfg, group), failures)
+                finally:
+                    container[index] = keep
+            else:
+                placed.append((key, value, bad))
+        if placed:
+            problems = _check(cfg, group)
+            for (_, container, index, _, _), keep in zip(leaves, saved, strict=True):
+                container[index] = keep
+            for key, value, bad in placed:
+                _judge(key, value, bad, problems, failures)
     assert _check(cfg, group) == []  # every value restored
     schema = OmegaConf.get_type(cfg[group])
     assert cases > 0 or not any(
         field_range(f) for f in dataclasses.fields(schema)
     )  # target=none, render=none
+    return cases, failures
+
+
+@pytest.mark.parametrize(("group", "option"), per_option(_options()))
+def test_every_numeric_leaf_refuses_nan_inf_and_out_of_range(group, option):
+    cases, failures = _refusals(group, option, one_at_a_time=False)
     assert not failures, f"{len(failures)} of {cases} cases:\n" + "\n".join(failures)
+
+
+@pytest.mark.parametrize(("group", "option"), [("task", "docking"), ("controller", "hqp")])
+def test_a_single_bad_leaf_is_refused_alone(group, option):
+    """The same cases, one bad leaf per check, on the options with the most leaves (nested
+    nodes, lists, per-joint lists, null lists): nothing in the check needs a second bad
+    value to see the first."""
+    cases, failures = _refusals(group, option, one_at_a_time=True)
+    assert not failures, f"{len(failures)} of {cases} cases:\n" + "\n".join(failures)
+
+
+def test_the_batch_judge_sees_a_leaf_the_check_misses(monkeypatch):
+    """The batch form can fail: a check that drops one key's problem is caught."""
+    from tests.config import test_validate as this
+
+    real = this._check
+
+    def blind(cfg, group):
+        return [p for p in real(cfg, group) if "controller.null_damping" not in p]
+
+    monkeypatch.setattr(this, "_check", blind)
+    _, failures = _refusals("controller", "impedance", one_at_a_time=False)
+    assert failures and all("controller.null_damping" in f for f in failures)
 
 
 # --------------------------------------------------------------------------- keys
