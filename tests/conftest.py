@@ -25,8 +25,17 @@ _WARM = (
 _WARM_LAWS = (("hqp",), ("se3_lie", "impedance"))
 #: the lock file the compiling processes hold until the last one is done (set for xdist's workers)
 WARM_LOCK = "COMPLIANT_DOCKING_TESTS_KERNEL_LOCK"
-#: tests that build no controller: they run first, while the kernels compile
-_NO_KERNEL = ("tests/config/", "tests/test_layout.py", "tests/test_references.py", "tests/test_readme.py")
+#: test files that build no controller: they run first, while the kernels compile (a file
+#: here that did build one would only compile a kernel a second time, not fail)
+_NO_KERNEL = (
+    "tests/config/test_defaults.py",
+    "tests/config/test_hydra_adapter.py",
+    "tests/config/test_presets.py",
+    "tests/config/test_validate.py",
+    "tests/test_layout.py",
+    "tests/test_references.py",
+    "tests/test_readme.py",
+)
 
 
 def pytest_configure(config) -> None:
