@@ -267,7 +267,12 @@ def _together(cwd: Path, *commands: list[str]) -> list[subprocess.CompletedProce
 
 #: the racing runs: 0.3 s simulated each (the race is for the directory, claimed before the
 #: simulation starts; what they simulate is not judged)
-RACING_RUN = ("trajectory.duration=0.2", "task.settle_time=0.1", "task.press_duration=0.1", "task.progress=false")
+RACING_RUN = (
+    "trajectory.duration=0.2",
+    "task.settle_time=0.1",
+    "task.press_duration=0.1",
+    "task.progress=false",
+)
 
 
 def test_two_runs_started_together_each_get_their_own_directory(tmp_path):
