@@ -328,6 +328,10 @@ def _loky_workers(pid: int) -> list[psutil.Process]:
     return found
 
 
+# nightly (a real sweep killed with SIGKILL); fast proof:
+# tests/sweep/test_watchdog.py::test_a_pool_worker_exits_when_its_launching_process_dies
+# (the pool's worker start-up starts the watchdog, and a worker whose launcher dies exits)
+@pytest.mark.slow
 def test_the_workers_of_a_killed_sweep_exit_within_a_minute(tmp_path):
     """SIGKILL of the launching process leaves its joblib worker without a parent: its
     watchdog ends it (measured: about 1 s) instead of loky's 300 s idle timeout or, as
