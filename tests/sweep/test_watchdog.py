@@ -1,5 +1,5 @@
 """A sweep worker whose launching process dies exits (compliant_docking/sweep/watchdog.py),
-proved on forked processes: a "launcher" that forks a "worker" and dies at once. The
+proved on forked processes: a "launcher" that forks a "worker" and dies once it started. The
 same property on a real sweep killed with SIGKILL is the nightly
 tests/sweep/test_guard.py::test_the_workers_of_a_killed_sweep_exit_within_a_minute."""
 
