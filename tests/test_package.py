@@ -123,14 +123,16 @@ def test_the_documented_user_config_example_is_the_one_tested():
 
 def test_user_options_from_outside_the_package_run_and_sweep(tmp_path, monkeypatch, capsys):
     """The README's way to add a controller and an interface without editing the package:
-    --config-dir for a run (the command's main, in this process, from another directory) and
-    a search path for a sweep (a command-line process whose jobs compose in worker processes)."""
+    --config-dir for a run and a search path for a sweep, both through the command's main in
+    this process, from another directory. A sweep composes every job's config where it is
+    launched, on the default pool too (sweep/pool.py sends the composed configs to its
+    workers), so Hydra's basic launcher here composes the jobs as the pool would."""
     conf = _write_user_conf(tmp_path)
     short = ("task.duration=0.5", "task.progress=false")
     monkeypatch.chdir(tmp_path)
     code, out, err = cli_in_process_output(
         capsys, "--config-dir", str(conf), "controller=stiff_impedance", "tool=wide_plug",
-        "target=wide_socket", *short, f"hydra.run.dir={tmp_path / 'run'}",
+        "target=wide_socket", *short, "figures=false", f"hydra.run.dir={tmp_path / 'run'}",
     )  # fmt: skip
     assert code in (0, 3), out[-2000:] + err[-2000:]  # 3: a 0.5 s run is not seated
     config = (tmp_path / "run" / ".hydra" / "config.yaml").read_text()
@@ -138,15 +140,15 @@ def test_user_options_from_outside_the_package_run_and_sweep(tmp_path, monkeypat
     metrics = json.loads((tmp_path / "run" / "metrics.json").read_text())
     assert metrics["status"] in ("ok", "incomplete") and metrics["error"] is None
 
-    sweep = subprocess.run(
-        [sys.executable, "-m", "compliant_docking", "-m", f"hydra.searchpath=[file://{conf}]",
-         "controller=impedance,stiff_impedance", *short, "hydra.callbacks.sweep.figures=false",
-         f"hydra.sweep.dir={tmp_path / 'sweep'}"],
-        cwd=tmp_path, capture_output=True, text=True, timeout=300, env=_env(),
+    code, out, err = cli_in_process_output(
+        capsys, "-m", f"hydra.searchpath=[file://{conf}]", "controller=impedance,stiff_impedance",
+        *short, "hydra/launcher=basic", "hydra.callbacks.sweep.figures=false",
+        f"hydra.sweep.dir={tmp_path / 'sweep'}",
     )  # fmt: skip
-    assert sweep.returncode == 0, sweep.stdout[-2000:] + sweep.stderr[-2000:]
+    assert code == 0, out[-2000:] + err[-2000:]
     jobs = sorted(p.parent.name for p in (tmp_path / "sweep").glob("*/metrics.json"))
     assert [j.split(",")[0] for j in jobs] == ["0_controller=impedance", "1_controller=stiff_impedance"]
+    assert "k: 150.0" in (tmp_path / "sweep" / jobs[1] / ".hydra" / "config.yaml").read_text()
 
 
 # --------------------------------------------------------------- the wheel

@@ -13,8 +13,17 @@ from omegaconf import OmegaConf
 
 from compliant_docking.logger.mlflow_callback import MlflowCallback, param_text
 from compliant_docking.run.rundir import flatten
-from tests.helpers import SHORT_SWEEP as SHORT
 from tests.helpers import SWEEP_LAUNCHERS, sweep_with
+
+#: two short docking jobs (0.3 s simulated: what is judged is what is logged, not the run)
+SHORT = (
+    "controller=impedance",
+    "trajectory=quintic",
+    "trajectory.duration=0.2",
+    "task.settle_time=0.1",
+    "task.press_duration=0.1",
+    "task.progress=false",
+)
 
 
 @pytest.fixture
@@ -41,9 +50,8 @@ def test_a_sweep_is_a_parent_run_with_one_child_run_per_job(tmp_path, store, cap
         capsys,
         sweep,
         *SHORT,
-        "robot=iiwa14,fr3",
         "+logger=mlflow",
-        "figures=true",  # sweep jobs draw none by default: here they do, to log them
+        "figures=true,false",  # sweep jobs draw none by default: the first draws them, to log them
         "hydra.callbacks.sweep.figures=false",
         env={"MLFLOW_TRACKING_URI": store},
     )
@@ -70,15 +78,19 @@ def test_a_sweep_is_a_parent_run_with_one_child_run_per_job(tmp_path, store, cap
         expected = {k: param_text(v) for k, v in flatten(config).items()}
         assert run.data.params == expected
         assert run.data.params["robot.name"] == record["robot"]
+        assert run.data.params["figures"] == param_text(job.name.startswith("0_"))
         # every number of metrics.json as a metric, the rest as tags
         assert run.data.metrics["peak_axial_force_N"] == pytest.approx(record["peak_axial_force_N"])
         assert run.data.metrics["success"] == float(record["success"])
         assert run.data.tags["status"] == record["status"] == "ok"
         assert run.data.tags["config_hash"] == record["config_hash"]
         files = {a.path for a in client.list_artifacts(run.info.run_id)}
-        assert {"metrics.json", "summary.txt", "figures", "hydra"} <= files
-        figures = {a.path for a in client.list_artifacts(run.info.run_id, "figures")}
-        assert "figures/contact_force.png" in figures
+        assert {"metrics.json", "summary.txt", "hydra"} <= files
+        if job.name.startswith("0_"):  # figures=true: its figures are logged
+            figures = {a.path for a in client.list_artifacts(run.info.run_id, "figures")}
+            assert "figures/contact_force.png" in figures
+        else:  # figures=false: none drawn, none logged
+            assert "figures" not in files
 
 
 def job_dir(tmp_path):

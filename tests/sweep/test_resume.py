@@ -3,6 +3,8 @@ resumed sweep runs exactly the jobs without one."""
 
 from __future__ import annotations
 
+import contextlib
+import io
 import json
 import os
 import signal
@@ -153,14 +155,7 @@ def _kill_and_resume(tmp_path: Path, signum: int) -> Killed:
     skipped = [str(w.message) for w in caught if issubclass(w.category, RunSkippedWarning)]
 
     time.sleep(0.05)  # mtimes of the resume are strictly later
-    resumed = subprocess.run(
-        sweep_command(sweep_dir, f"resume={sweep_dir}"),
-        cwd=REPO_ROOT,
-        capture_output=True,
-        text=True,
-        timeout=300,
-        env=_env(),
-    )
+    resumed = _resume_in_this_process(sweep_dir)
     return Killed(
         sweep_dir,
         signum,
@@ -177,6 +172,26 @@ def _kill_and_resume(tmp_path: Path, signum: int) -> Killed:
         skipped,
         resumed,
     )
+
+
+def _resume_in_this_process(sweep_dir: Path) -> subprocess.CompletedProcess:
+    """The killed sweep's command with ``resume=``, through the command's main in this
+    process on Hydra's basic launcher (its jobs run here too, one after the other): which
+    jobs a resume keeps and reruns is decided by the sweep's callback before any launcher
+    runs them (sweep/resume.py), and the launcher is not one of the overrides a resume
+    compares with the sweep's (``hydra.overrides.task``)."""
+    from compliant_docking.cli import main
+
+    args = [
+        a for a in sweep_command(sweep_dir, f"resume={sweep_dir}")[3:] if not a.startswith("hydra.launcher.")
+    ]
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        try:
+            code = main([*args, "hydra/launcher=basic"])
+        except SystemExit as exc:
+            code = exc.code if isinstance(exc.code, int) else 1
+    return subprocess.CompletedProcess(args, code, out.getvalue(), err.getvalue())
 
 
 @pytest.fixture(
