@@ -26,3 +26,18 @@ def converted(tmp_path_factory):
     options = cad.ConvertOptions(symmetry=4, plug_mass=0.3, coacd=QUICK, keep=0.5)
     result = cad.convert(plug_stl, socket_stl, root / "out", options, log=lambda _: None)
     return plug_stl, socket_stl, options, result
+
+
+@pytest.fixture
+def audit_passed(monkeypatch):
+    """The converter's contact audit replaced by a passing verdict, for tests whose property
+    is not the audit (the threshold chosen, the cache): the audit is half of a conversion's
+    time. The audit itself is tested with the session's conversion (``converted``, whose
+    manifest it passed) and through the command line's refusal in tests/sim/test_cad.py."""
+    from compliant_docking.sim.geometry import cad
+    from compliant_docking.sim.geometry.conversion_audit import ContactAudit
+
+    def passed(*args, **kwargs):
+        return ContactAudit(contacts=1, poses=1, worst_deg=0.0, worst_excess_up=0.0, tolerance_deg=1.0, unsound=())
+
+    monkeypatch.setattr(cad, "audit_fragments", passed)
