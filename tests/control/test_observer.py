@@ -152,7 +152,11 @@ def test_hqp_with_the_observer_docks_and_reports_it(tmp_path, robot):
     short = SHORT_CONTACT if robot == "iiwa14" else ()
     rec = execute(
         make_cfg(
-            "controller=hqp", f"robot={robot}", "controller.force_source=observer", "task.progress=false", *short
+            "controller=hqp",
+            f"robot={robot}",
+            "controller.force_source=observer",
+            "task.progress=false",
+            *short,
         ),
         tmp_path,
         figures=False,

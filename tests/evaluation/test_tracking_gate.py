@@ -299,7 +299,11 @@ def test_a_gate_failure_exits_3_through_the_command_line(tmp_path, capsys):
     )
     assert code == 3, out + err
     failures = out.split("gate: ")[-1]  # the summary's last line but one: what failed
-    assert "tracking gate FAIL" in out and failures.startswith("circle position RMS") and "figure8" not in failures
+    assert (
+        "tracking gate FAIL" in out
+        and failures.startswith("circle position RMS")
+        and "figure8" not in failures
+    )
 
 
 def test_a_short_run_is_incomplete(tmp_path):

@@ -36,7 +36,11 @@ _NIGHTLY = pytest.mark.slow(reason="the same handler as the fast cell; see _sign
 
 def _signals(fast: signal.Signals) -> list:
     """(signum, exit status, name) of each stop signal; only ``fast``'s cell in the fast suite."""
-    cells = [(signal.SIGINT, 130, "SIGINT (Ctrl-C)"), (signal.SIGTERM, 143, "SIGTERM"), (signal.SIGHUP, 129, "SIGHUP")]
+    cells = [
+        (signal.SIGINT, 130, "SIGINT (Ctrl-C)"),
+        (signal.SIGTERM, 143, "SIGTERM"),
+        (signal.SIGHUP, 129, "SIGHUP"),
+    ]
     return [cell if cell[0] == fast else pytest.param(*cell, marks=_NIGHTLY) for cell in cells]
 
 

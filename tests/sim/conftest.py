@@ -39,7 +39,9 @@ def passed_audit(*args, **kwargs):
     """A passing contact audit, in place of the converter's (``cad.audit_fragments``)."""
     from compliant_docking.sim.geometry.conversion_audit import ContactAudit
 
-    return ContactAudit(contacts=1, poses=1, worst_deg=0.0, worst_excess_up=0.0, tolerance_deg=1.0, unsound=())
+    return ContactAudit(
+        contacts=1, poses=1, worst_deg=0.0, worst_excess_up=0.0, tolerance_deg=1.0, unsound=()
+    )
 
 
 @pytest.fixture
