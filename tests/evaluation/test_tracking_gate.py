@@ -298,7 +298,7 @@ def test_a_gate_failure_exits_3_through_the_command_line(tmp_path, capsys):
         f"hydra.run.dir={tmp_path / 'run'}",
     )
     assert code == 3, out + err
-    failures = out.split("gate: ")[-1]  # the summary's last line but one: what failed
+    failures = out.split("gate: ")[-1]  # the failing items, after the summary's last "gate: "
     assert (
         "tracking gate FAIL" in out
         and failures.startswith("circle position RMS")

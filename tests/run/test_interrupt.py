@@ -26,11 +26,10 @@ from tests.helpers import REPO_ROOT, make_cfg
 #: One signal per process test in the fast suite, the others in the nightly suite (`slow`):
 #: the run installs one handler for SIGINT, SIGTERM and SIGHUP alike (run/interrupt.py's
 #: raise_stop) and holds all three alike while its directory is claimed, so each test's
-#: fast cell proves the path for every signal; between them both tests prove 130 and 143
-#: through a process (fast proofs: the loop, test_a_signalled_single_run_records_itself_as_
-#: interrupted[15-143-SIGTERM]; the directory, test_a_signal_as_the_run_directory_appears_
-#: is_recorded[2-130-SIGINT (Ctrl-C)]); 129 for SIGHUP: tests/test_exit_codes.py; SIGHUP
-#: delivered to a command: test_the_other_commands_stop_on_a_signal_in_one_line[interface]
+#: fast cell proves the path for every signal. Fast proofs: the signalled loop's SIGTERM
+#: cell (143 through a process) and the claimed directory's SIGINT cell (130 through a
+#: process), below; 129 for SIGHUP: tests/test_exit_codes.py; SIGHUP delivered to a
+#: command: test_the_other_commands_stop_on_a_signal_in_one_line[interface]
 _NIGHTLY = pytest.mark.slow(reason="the same handler as the fast cell; see _signals")
 
 
