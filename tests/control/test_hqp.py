@@ -218,7 +218,9 @@ def _limits_case(robot: str, margin: float):
     return sim, joint, limits[joint]
 
 
-@pytest.mark.parametrize("robot", ["iiwa14", "fr3"])
+# the iiwa14's cell is nightly (`slow`); fast proof: the FR3's cell of this test (the same
+# constraint rows, with the harder case: the FR3's imperfect friction feed-forward)
+@pytest.mark.parametrize("robot", [pytest.param("iiwa14", marks=pytest.mark.slow), "fr3"])
 def test_predicted_constraints_hold_in_simulation(robot):
     """Velocity 0.3 rad/s, torque clip 3 N·m and one joint 0.05 rad from its limit, on a
     1 s stroke that would need more of all three.
@@ -426,12 +428,13 @@ def test_metrics_and_timeseries_carry_the_controller_signals(tmp_path):
 
 @pytest.mark.parametrize("robot", ["fr3", "iiwa14"])
 def test_hqp_holds_still_near_a_singularity(robot):
-    """Holding the TCP still for 10 s at the seat's position (free space), where the FR3's
+    """Holding the TCP still for 3 s at the seat's position (free space), where the FR3's
     manipulability (0.065) is below omega_th (0.08) and singularity avoidance acts every
-    step: with the default (inertia) null-space metric no joint moves. The paper's
-    euclidean direction leaks into the dynamically consistent null space and turns the
-    FR3's q1 and q3 by 0.014 rad (measured), which this bound — 1e-3 rad, a fourteenth of
-    that — catches; the iiwa14 stays above omega_th and must not move either."""
+    step: with the default (inertia) null-space metric no joint moves (measured 8e-12 rad).
+    The paper's euclidean direction leaks into the dynamically consistent null space and
+    turns the FR3's q1 and q3 by 0.0046 rad in these 3 s (0.014 rad in 10 s; measured),
+    which this bound — 1e-3 rad, under a quarter of that — catches; the iiwa14 stays above
+    omega_th and must not move either."""
 
     def drift(*overrides):
         sim = prepare(
@@ -440,7 +443,7 @@ def test_hqp_holds_still_near_a_singularity(robot):
                 "controller=hqp",
                 "target=none",
                 "trajectory=hold",
-                "trajectory.duration=10",
+                "trajectory.duration=3",
                 "task.settle_time=0",
                 "task.init_pos=[0.55,0.0,0.21]",
                 "task.progress=false",
@@ -454,6 +457,6 @@ def test_hqp_holds_still_near_a_singularity(robot):
     moved, active = drift()
     assert moved < 1e-3
     if robot == "fr3":
-        assert active == 10_000  # the avoidance term was on all along
+        assert active == 3_000  # the avoidance term was on all along
         moved, _ = drift("controller.null_space_metric=euclidean")
-        assert moved > 5e-3  # the bound can fail: the paper's direction drifts
+        assert moved > 3e-3  # the bound can fail: the paper's direction drifts (measured 4.6e-3)

@@ -14,7 +14,7 @@ import pytest
 from compliant_docking.control.observer import WRENCH_COLUMNS, MomentumObserver
 from compliant_docking.run.runner import execute
 from compliant_docking.sim.simulate import prepare
-from tests.helpers import make_cfg, push_at_tcp
+from tests.helpers import SHORT_CONTACT, make_cfg, push_at_tcp
 
 WRENCH = np.array([6.0, -4.0, 5.0, 0.3, -0.2, 0.1])  # [f; m] at the TCP, world axes
 RAMP_S = 0.5  # the push rises smoothly over this time
@@ -64,9 +64,10 @@ def hold_cfg(robot, *overrides, seconds=6):
 @pytest.mark.parametrize("robot", ["iiwa14", "fr3"])
 def test_observer_estimates_a_constant_push(robot):
     """A stiff impedance controller holds the tool against the push; an observer rides
-    along (any controller can host one). After settling (last second of the run) the
-    estimate is the wrench: on the iiwa14 (exact model, no friction) to 1e-6 (measured
-    1.6e-9: the PI observer's residual); on the FR3 to 1 % (measured 0.19 %): its joints
+    along (any controller can host one). After settling (the last second of a 4 s hold)
+    the estimate is the wrench: on the iiwa14 (exact model, no friction) to 1e-6 (measured
+    1.4e-7: the PI observer's residual, 1.6e-9 after 6 s); on the FR3 to 1 % (measured
+    0.58 %, 0.12 % after 6 s): its joints
     keep their friction, which hides up to 1.14 N·m while a joint sticks. The host runs
     the law of §1 (no apparent-inertia floor): the floor, meant for stiff contact, leaves
     the FR3 (m = 2 kg) up to 4× heavier here, so friction makes it creep for longer than
@@ -79,6 +80,7 @@ def test_observer_estimates_a_constant_push(robot):
             "controller.k_rot=200",
             "controller.d_rot=28",
             "controller.apparent_inertia_floor=null",
+            seconds=4,
         )
     )
     observer = ride_along(sim)
@@ -143,10 +145,18 @@ def test_observer_clips_the_command_like_the_motors():
 )
 def test_hqp_with_the_observer_docks_and_reports_it(tmp_path, robot):
     """controller.force_source=observer: the estimate goes to the time series beside the
-    sensor wrench and its error against the sensor to metrics.json."""
+    sensor wrench and its error against the sensor to metrics.json. The iiwa14 on the
+    short held-contact scene (tests.helpers.SHORT_CONTACT: the estimate drives the same
+    approach, seat and hold; steady error 0.0115 N against 0.0116 N on the full run,
+    measured), the FR3 (nightly) on the full run."""
+    short = SHORT_CONTACT if robot == "iiwa14" else ()
     rec = execute(
         make_cfg(
-            "controller=hqp", f"robot={robot}", "controller.force_source=observer", "task.progress=false"
+            "controller=hqp",
+            f"robot={robot}",
+            "controller.force_source=observer",
+            "task.progress=false",
+            *short,
         ),
         tmp_path,
         figures=False,

@@ -578,7 +578,7 @@ RESEARCH_CASE = ("task.stroke=[0.0,0.0,-0.18]",)
 #: the planner docks with the default controller in the fast suite, with the other controllers
 #: in the nightly suite (`slow`): the plan does not depend on the controller (its durations
 #: are checked in the impedance cell), and each other controller docks the default scene in
-#: its own fast tests (tests/control/test_hqp.py, test_se3_lie.py, test_observer.py)
+#: its own fast tests (tests/control/test_hqp.py, test_se3_lie.py)
 _OTHER_CONTROLLERS = pytest.mark.slow(reason="the impedance cell proves the se3topp docking")
 
 

@@ -1,5 +1,7 @@
-"""The command line, through a real process: the default docking with its run directory and
-the exit statuses (0 docked, 1 failed, 3 gate not passed); --help: tests/test_cli.py."""
+"""The command line: the default docking with its run directory and the exit statuses (0
+docked, 1 failed, 3 gate not passed), its main in this process (a process's exit status is
+main's, `sys.exit(main())`: 130 and 143 through a real process in tests/run/test_interrupt.py,
+the console script against main in tests/test_cli.py); --help: tests/test_cli.py."""
 
 import json
 import os
@@ -8,13 +10,13 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from tests.helpers import run_cli
+from tests.helpers import cli_in_process_output, run_cli
 
 #: a short docking (1 s stroke, 1 s settling): enough to finish with status ok
 SHORT = ("trajectory.duration=1", "task.settle_time=1", "task.progress=false", "figures=false")
 
 
-def test_the_default_docking_succeeds_and_writes_the_run_directory(tmp_path):
+def test_the_default_docking_succeeds_and_writes_the_run_directory(tmp_path, capsys):
     """`python -m compliant_docking`: the default scene docks (exit 0) and the run directory
     is complete. Expected: seated (depth < 1 mm), inside the bore's 0.4 mm radial
     clearance (+0.1 mm: the 30° chamfer's centring play), pressed home by the reference's
@@ -23,9 +25,9 @@ def test_the_default_docking_succeeds_and_writes_the_run_directory(tmp_path):
     (±10 %: a one-step contact impulse, the value most sensitive to round-off across
     MuJoCo builds; the earth twin in tests/run/test_runner.py has its own)."""
     run_dir = tmp_path / "run"
-    result = run_cli(f"hydra.run.dir={run_dir}", "task.progress=false")
-    assert result.returncode == 0, result.stderr[-2000:]
-    assert "success true" in result.stdout
+    code, out, err = cli_in_process_output(capsys, f"hydra.run.dir={run_dir}", "task.progress=false")
+    assert code == 0, err[-2000:]
+    assert "success true" in out
     for name in ("metrics.json", "timeseries.parquet", "summary.txt", ".hydra/config.yaml"):
         assert (run_dir / name).is_file(), name
     for stem in ("tcp_tracking", "tracking_error", "contact_force", "joint_torques"):
@@ -46,7 +48,7 @@ def test_the_default_docking_succeeds_and_writes_the_run_directory(tmp_path):
 
 @pytest.mark.slow(
     reason="in-process proof: tests/test_exit_codes.py::test_a_failed_run_exits_1_and_an_undocked_one_3; "
-    "a process's exit status is main's: test_the_default_docking_succeeds_and_writes_the_run_directory"
+    "a process's exit status is main's: tests/run/test_interrupt.py's signalled runs (130, 143)"
 )
 def test_a_docking_gate_failure_exits_3(tmp_path):
     """A run that finishes (status ok) but is never within 1 nm of the seat."""
@@ -60,7 +62,7 @@ def test_a_docking_gate_failure_exits_3(tmp_path):
 
 @pytest.mark.slow(
     reason="in-process proof: tests/test_exit_codes.py::test_a_failed_run_exits_1_and_an_undocked_one_3; "
-    "a process's exit status is main's: test_the_default_docking_succeeds_and_writes_the_run_directory"
+    "a process's exit status is main's: tests/run/test_interrupt.py's signalled runs (130, 143)"
 )
 def test_a_runtime_failure_exits_1(tmp_path):
     """A config that passes every check but cannot run (a socket out of the arm's reach):

@@ -27,7 +27,7 @@ def test_a_job_that_draws_nothing_never_imports_matplotlib(tmp_path):
     """Through the command line, in one fresh process: a single run with figures=false and a
     sweep job (default: no figures) leave matplotlib unimported; figures=true in a sweep
     draws the job's figures (and so imports it)."""
-    short = list(SHORT_SWEEP)
+    short = [*SHORT_SWEEP, "task.duration=0.2"]  # 0.2 s of each run: what is drawn, not what docks
     code = textwrap.dedent(f"""
         import json, sys
         from compliant_docking.cli import main

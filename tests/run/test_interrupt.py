@@ -23,17 +23,24 @@ from compliant_docking.sim import mjlog
 from tests.helpers import REPO_ROOT, make_cfg
 
 # --------------------------------------------------------------------------- signals
-#: SIGHUP's process cells in the nightly suite (`slow`): the run installs one handler for
-#: SIGTERM and SIGHUP alike (run/interrupt.py's raise_stop), which the SIGTERM cells prove
-#: through a process; 129 for SIGHUP: tests/test_exit_codes.py; SIGHUP delivered to a
+#: One signal per process test in the fast suite, the others in the nightly suite (`slow`):
+#: the run installs one handler for SIGINT, SIGTERM and SIGHUP alike (run/interrupt.py's
+#: raise_stop) and holds all three alike while its directory is claimed, so each test's
+#: fast cell proves the path for every signal. Fast proofs: the signalled loop's SIGTERM
+#: cell (143 through a process) and the claimed directory's SIGINT cell (130 through a
+#: process), below; 129 for SIGHUP: tests/test_exit_codes.py; SIGHUP delivered to a
 #: command: test_the_other_commands_stop_on_a_signal_in_one_line[interface]
-SIGNALS = [
-    (signal.SIGINT, 130, "SIGINT (Ctrl-C)"),
-    (signal.SIGTERM, 143, "SIGTERM"),
-    pytest.param(
-        signal.SIGHUP, 129, "SIGHUP", marks=pytest.mark.slow(reason="SIGTERM's handler; see SIGNALS")
-    ),
-]
+_NIGHTLY = pytest.mark.slow(reason="the same handler as the fast cell; see _signals")
+
+
+def _signals(fast: signal.Signals) -> list:
+    """(signum, exit status, name) of each stop signal; only ``fast``'s cell in the fast suite."""
+    cells = [
+        (signal.SIGINT, 130, "SIGINT (Ctrl-C)"),
+        (signal.SIGTERM, 143, "SIGTERM"),
+        (signal.SIGHUP, 129, "SIGHUP"),
+    ]
+    return [cell if cell[0] == fast else pytest.param(*cell, marks=_NIGHTLY) for cell in cells]
 
 
 def _start_run(run_dir: Path, *args: str) -> tuple[subprocess.Popen, list[str]]:
@@ -83,7 +90,7 @@ def _wait(proc: subprocess.Popen, ready, what: str) -> None:
         time.sleep(0.01)
 
 
-@pytest.mark.parametrize(("signum", "code", "how"), SIGNALS)
+@pytest.mark.parametrize(("signum", "code", "how"), _signals(signal.SIGTERM))
 def test_a_signalled_single_run_records_itself_as_interrupted(tmp_path, signum, code, how):
     """A signal in the middle of a run (once it prints its progress: the loop runs): status
     "interrupted" with the time series so far (one row per simulated step), exit 128 +
@@ -108,7 +115,7 @@ def test_a_signalled_single_run_records_itself_as_interrupted(tmp_path, signum, 
     assert "status interrupted" in out and "INTERRUPTED" in (run_dir / "summary.txt").read_text()
 
 
-@pytest.mark.parametrize(("signum", "code", "how"), SIGNALS)
+@pytest.mark.parametrize(("signum", "code", "how"), _signals(signal.SIGINT))
 def test_a_signal_as_the_run_directory_appears_is_recorded(tmp_path, signum, code, how):
     """The moment the run's directory is claimed, before the loop (Hydra writes .hydra/, the
     libraries load): before, SIGINT left the directory without a record and SIGTERM ended
@@ -152,13 +159,25 @@ def test_a_signal_while_the_record_is_written_waits_for_it(tmp_path, monkeypatch
     assert record["status"] == "ok" and (tmp_path / "summary.txt").is_file()  # the finished run's record
 
 
-def test_an_interrupted_run_in_python_is_recorded_then_raised(tmp_path):
+def test_an_interrupted_run_in_python_is_recorded_then_raised(tmp_path, monkeypatch):
     """execute() records the interruption, then raises it again: a loop of runs stops."""
-    cfg = make_cfg("trajectory.duration=200", "task.progress=false")
-    done = threading.Event()
+    from compliant_docking.sim.simulate import Simulation
 
-    def press_ctrl_c() -> None:  # from 3 s on, once a second until the run has stopped
-        while not done.wait(3.0 if not sent else 1.0):
+    cfg = make_cfg("trajectory.duration=200", "task.progress=false")
+    done, looping = threading.Event(), threading.Event()
+    start = Simulation.start
+
+    def started(self, *args, **kwargs):  # the loop's bindings are made: its steps come next
+        start(self, *args, **kwargs)
+        looping.set()
+
+    monkeypatch.setattr(Simulation, "start", started)
+
+    def press_ctrl_c() -> None:  # 0.3 s into the loop, then twice a second until it has stopped
+        while not looping.wait(0.05):
+            if done.is_set():
+                return
+        while not done.wait(0.3 if not sent else 0.5):
             os.kill(os.getpid(), signal.SIGINT)
             sent.append(time.monotonic())
 

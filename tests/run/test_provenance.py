@@ -205,6 +205,9 @@ def _compose_with_hydra(*overrides: str):
     return cfg
 
 
+# fast proof: tests/run/test_provenance.py::test_a_fresh_process_gives_the_same_run (the fresh
+# process's metrics.json carries the same config_hash, which is not a volatile key)
+@pytest.mark.slow
 def test_config_hash_is_the_same_in_a_fresh_process():
     code = textwrap.dedent(f"""
         from compliant_docking.config import load_config
@@ -255,7 +258,8 @@ def test_the_same_config_gives_the_same_run(tmp_path, overrides):
 
 
 def test_a_fresh_process_gives_the_same_run(tmp_path, short_run):
-    """No state carried between jobs of a reused worker: a new process gives the same run."""
+    """No state carried between jobs of a reused worker: a new process gives the same run
+    (and the same config_hash: a new process hashes the config as this one does)."""
     run_dir, _ = short_run
     code = textwrap.dedent(f"""
         from compliant_docking.config import load_config

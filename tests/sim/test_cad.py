@@ -130,7 +130,7 @@ def test_converted_mass_properties_are_the_generators(converted):
     np.testing.assert_allclose(result.manifest["com_in_tool_dock_m"], com, rtol=1e-9)
 
 
-def test_second_call_uses_the_cache(converted, monkeypatch, tmp_path):
+def test_second_call_uses_the_cache(converted, monkeypatch, tmp_path, audit_passed):
     plug_stl, socket_stl, options, result = converted
 
     def no_coacd(*args, **kwargs):
@@ -219,7 +219,9 @@ def test_raw_coacd_pieces_are_refused_by_the_contact_audit(converted, tmp_path, 
     assert not (tmp_path / "tool.xml").exists() and not (tmp_path / "interface.json").exists()
 
 
-def test_refinement_halves_the_threshold_of_the_part_with_holes(pair, converted, tmp_path, monkeypatch):
+def test_refinement_halves_the_threshold_of_the_part_with_holes(
+    pair, converted, tmp_path, monkeypatch, audit_passed
+):
     """A socket decomposition that leaves a wall out at 0.05 (a hole the growth cannot
     close) and is exact below: the converter refines the socket only (0.05 → 0.025);
     with nothing finer allowed it refuses, naming the hole."""

@@ -252,8 +252,12 @@ def test_a_misalignment_needs_a_socket():
 
 
 def test_large_misalignment_fails_the_gate_and_says_why(tmp_path):
-    """20 mm off: beyond the funnel's mouth (≈ 8.7 mm of capture), the plug lands beside it."""
-    record = execute(make_cfg(f"{M}.x=0.02", "task.progress=false"), tmp_path, figures=False, echo=False)
+    """20 mm off: beyond the funnel's mouth (≈ 8.7 mm of capture), the plug lands beside it.
+    The stroke in 8 s instead of 15 and 1 s of settling instead of 3: where the plug lands
+    does not depend on how fast it comes (first contact 19.997 mm off against 20.001 mm on
+    the default run, measured)."""
+    cfg = make_cfg(f"{M}.x=0.02", "trajectory.duration=8", "task.settle_time=1", "task.progress=false")
+    record = execute(cfg, tmp_path, figures=False, echo=False)
     assert record["status"] == "ok" and record["success"] is False
     assert "off the axis: tip up to 20 mm from the socket axis" in record["gate_failures"]
     assert record["seat_lateral_error_m"] > 0.015  # measured against the TRUE socket
