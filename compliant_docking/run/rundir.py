@@ -259,11 +259,6 @@ def flatten(mapping: Mapping[str, Any] | None, prefix: str = "") -> dict[str, An
 
 
 # --------------------------------------------------------------------------- finding jobs
-def is_job_dir(path: Path) -> bool:
-    """A job directory holds a metrics.json or a .hydra/ folder."""
-    return (Path(path) / METRICS_FILE).is_file() or (Path(path) / HYDRA_DIR).is_dir()
-
-
 def find_job_dirs(path: str | os.PathLike) -> list[Path]:
     """Every job directory under ``path`` (``path`` itself included), in natural order.
 

@@ -416,14 +416,6 @@ def _short(value) -> str:
     return f"{value:.4g}" if isinstance(value, float) else str(value)
 
 
-def _first_value(distribution) -> Any:
-    from optuna.distributions import CategoricalDistribution
-
-    if isinstance(distribution, CategoricalDistribution):
-        return distribution.choices[0]
-    return distribution.low
-
-
 def _describe(distribution) -> str:
     from optuna.distributions import CategoricalDistribution
 

@@ -3,7 +3,6 @@ a figure leaves out (no figure drops a configuration silently)."""
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -97,11 +96,6 @@ def colors(plt) -> list[str]:
 
 def facet_title(row: str | None, row_value: str, col: str | None, col_value: str) -> str:
     return " · ".join(v for v in (row_value if row else "", col_value if col else "") if v)
-
-
-def grid_shape(n: int, max_cols: int = 4) -> tuple[int, int]:
-    cols = min(n, max_cols)
-    return math.ceil(n / cols), cols
 
 
 def budget_of(df: pd.DataFrame) -> float | None:
