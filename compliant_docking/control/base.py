@@ -23,7 +23,7 @@ from scipy.linalg import lapack
 
 from compliant_docking.config import FrictionComp
 from compliant_docking.control.integral import PoseIntegral
-from compliant_docking.control.kernel_blocks import FRICTION_CODES, YIELD_SPEED, friction_feed_forward
+from compliant_docking.control.kernel_blocks import YIELD_SPEED, friction_code, friction_feed_forward
 from compliant_docking.planning.base import Reference
 from compliant_docking.sim.context import ControlContext
 from compliant_docking.sim.models import ArmModel
@@ -57,9 +57,11 @@ class FrictionFeedForward:
         self.b = np.asarray(damping, dtype=float).copy()
         self.active = bool(np.any(self.f > 0.0) or np.any(self.b > 0.0))
         self._unbiased = self.mode in (FrictionComp.yielding, FrictionComp.torque_unbiased)
-        self._code = FRICTION_CODES[self.mode]
-        # the argument of tanh per unit of its input: 2/f (torque modes) or 1/0.01 (velocity)
-        self._scale = (
+        # what the compiled block takes (the compiled laws copy them into their parameters):
+        # the mode's code, and the argument of tanh per unit of its input, 2/f (torque modes)
+        # or 1/0.01 (velocity)
+        self.code = friction_code(self.mode)
+        self.scale = (
             2.0 / np.where(self.f > 0.0, self.f, 1.0)
             if self.mode is not FrictionComp.velocity
             else np.full_like(self.f, 1.0 / self.VELOCITY_SCALE)
@@ -80,7 +82,7 @@ class FrictionFeedForward:
             raise ValueError(f"friction_comp={self.mode.value} needs the bias torques h of the step")
         out = np.empty_like(self.f)
         friction_feed_forward(
-            tau_pre, v, v if bias is None else bias, self.f, self.b, self._scale, self._code, out
+            tau_pre, v, v if bias is None else bias, self.f, self.b, self.scale, self.code, out
         )
         return out
 

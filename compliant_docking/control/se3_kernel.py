@@ -48,7 +48,6 @@ from compliant_docking.control.jit import kernel
 from compliant_docking.control.kernel_blocks import (
     cholesky,
     cholesky_solve,
-    friction_code,
     friction_feed_forward,
 )
 from compliant_docking.control.lie.series import PI_MARGIN, inv_coefficients
@@ -367,8 +366,8 @@ class StepKernel:
         par["has_F_d"] = bool(np.any(ctrl.desired_wrench))
         par["force_feedback"] = ctrl.use_force_feedback
         par["floor"] = floor is not None
-        par["friction"], par["friction_mode"] = fr.active, friction_code(fr.mode)
-        par["friction_f"], par["friction_b"], par["friction_scale"] = fr.f, fr.b, fr._scale
+        par["friction"], par["friction_mode"] = fr.active, fr.code
+        par["friction_f"], par["friction_b"], par["friction_scale"] = fr.f, fr.b, fr.scale
         self.state = np.zeros(1, state_dtype(nv))
         st = self.state[0]
         self.Jb, self.JbMinv, self.a, self.tau = st["Jb"], st["JbMinv"], st["a"], st["tau"]

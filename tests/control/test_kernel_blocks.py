@@ -52,7 +52,7 @@ def test_friction_feed_forward_is_its_closed_form(mode):
         expected = _closed_form(mode, tau, v, h, f, b)
         np.testing.assert_allclose(ff(tau, v, h), expected, rtol=0, atol=8 * eps * (f.max() + 1.0))
         out = np.empty(n)  # the kernels' call: the same block, the same numbers
-        friction_feed_forward(tau, v, h, ff.f, ff.b, ff._scale, friction_code(mode), out)
+        friction_feed_forward(tau, v, h, ff.f, ff.b, ff.scale, friction_code(mode), out)
         assert np.array_equal(out, ff(tau, v, h))
 
 

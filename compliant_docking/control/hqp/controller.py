@@ -51,7 +51,6 @@ from compliant_docking.control.hqp.compliance import PreloadRamp, modal_damping
 from compliant_docking.control.hqp.manipulability import check_revolute_chain
 from compliant_docking.control.hqp.qp_level import QPLevel
 from compliant_docking.control.integral import off_record
-from compliant_docking.control.kernel_blocks import friction_code
 from compliant_docking.control.observer import MomentumObserver
 from compliant_docking.planning.base import Reference
 from compliant_docking.sim.context import ControlContext
@@ -170,7 +169,7 @@ class HQPController(Controller):
             ("use_force_feedback", self.use_force_feedback),
             ("solve_every_step", self.solve_every_step),
             ("friction", friction.active),
-            ("friction_mode", friction_code(friction.mode)),
+            ("friction_mode", friction.code),
             ("K0", self.K0),
             ("P", self._P),
             ("axis", self.axis),
@@ -178,7 +177,7 @@ class HQPController(Controller):
             ("half", self._half),
             ("friction_f", friction.f),
             ("friction_b", friction.b),
-            ("friction_scale", friction._scale),
+            ("friction_scale", friction.scale),
         ):
             params[name] = value
         self._params = params
