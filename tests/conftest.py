@@ -47,7 +47,7 @@ def pytest_configure(config) -> None:
     for hqp on a shared 2-core machine). Here the kernels compile in two processes that
     start before the workers; the workers collect meanwhile and run the tests that build no
     controller (:data:`_NO_KERNEL`, ordered first), and every other test waits until the
-    compiling processes have exited (:func:`_kernels_compiled`), then loads the cache. Only
+    compiling processes have exited (:func:`pytest_runtest_setup`), then loads the cache. Only
     for a distributed run (``-n``): a single targeted test pays nothing when the cache is warm.
     """
     if hasattr(config, "workerinput") or config.getoption("collectonly", False):
