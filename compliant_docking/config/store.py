@@ -61,21 +61,41 @@ _SCHEMAS: dict[str, dict[str, type]] = {
 }
 
 
+def _every_schema() -> list[tuple[str | None, str, type]]:
+    """(group, name, dataclass) of every schema :func:`register_schemas` stores."""
+    return [
+        (None, "base_config", Config),
+        *(
+            (f"schema/{group}", name, node)
+            for group, schemas in _SCHEMAS.items()
+            for name, node in schemas.items()
+        ),
+        # conf/env/docking.yaml: the Gymnasium environment's keys (load_env_config)
+        ("schema/env", "env", EnvConfig),
+        # hydra/sweeper=optuna (conf/hydra/sweeper/optuna.yaml): the tuning sweeper's keys
+        ("schema/sweeper", "optuna", TuningSweeperConfig),
+    ]
+
+
 def register_schemas() -> None:
     """Store every schema in Hydra's ConfigStore (idempotent).
 
-    The schemas of the submitit launcher presets are registered by the command line
-    (:func:`compliant_docking.sweep.launchers.register_schemas`): they belong to sweeps.
+    Storing converts each dataclass into a typed config (~50 ms in all), so a schema the
+    store already holds under its name is not stored again: :func:`load_config` calls this
+    at every composition. The schemas of the submitit launcher presets are registered by
+    the command line (:func:`compliant_docking.sweep.launchers.register_schemas`): they
+    belong to sweeps.
     """
     cs = ConfigStore.instance()
-    cs.store(name="base_config", node=Config)
-    for group, schemas in _SCHEMAS.items():
-        for name, node in schemas.items():
-            cs.store(group=f"schema/{group}", name=name, node=node)
-    # conf/env/docking.yaml: the Gymnasium environment's keys (load_env_config)
-    cs.store(group="schema/env", name="env", node=EnvConfig)
-    # hydra/sweeper=optuna (conf/hydra/sweeper/optuna.yaml): the tuning sweeper's keys
-    cs.store(group="schema/sweeper", name="optuna", node=TuningSweeperConfig)
+    held: dict[str | None, list[str]] = {}
+    for group, name, node in _every_schema():
+        if group not in held:
+            try:
+                held[group] = cs.list(group or "")
+            except OSError:  # a group not stored yet
+                held[group] = []
+        if f"{name}.yaml" not in held[group]:
+            cs.store(group=group, name=name, node=node)
 
 
 def load_config(*overrides: str) -> DictConfig:

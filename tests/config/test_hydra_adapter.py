@@ -72,6 +72,8 @@ def test_memoized_compositions_equal_hydras_own(without_memos):
     assert first == plain and again == plain
     hits, misses = hydra_adapter.stats["composed"]
     assert hits >= len(plain) and misses <= len(OVERRIDE_SETS)  # the memo served most
+    hits, misses = hydra_adapter.stats["files"]
+    assert hits > misses > 0  # every config file parsed once, then served from the memo
 
 
 @pytest.mark.parametrize(
@@ -107,6 +109,38 @@ def test_an_edited_config_file_is_read_again(tmp_path):
     path = conf / "controller" / "impedance.yaml"
     path.write_text(path.read_text().replace("k: 50.0", "k: 77.0"))
     assert k() == 77.0
+
+
+def test_a_file_edited_to_the_same_size_and_time_is_parsed_again(tmp_path):
+    """The file memo keys on the text, not on a stamp an edit may leave unchanged."""
+    import os
+
+    from hydra._internal.sources_registry import SourcesRegistry
+
+    hydra_adapter.install()
+    source = SourcesRegistry.instance().resolve("file")("test", f"file://{tmp_path}")
+    path = tmp_path / "gain.yaml"
+    path.write_text("k: 50.0\n")
+    stamp = os.stat(path).st_mtime_ns
+    first = source.load_config("gain")
+    first.config.k = 1.0  # a caller that changes what it got changes no later copy
+    assert source.load_config("gain").config.k == 50.0
+    path.write_text("k: 77.0\n")
+    os.utime(path, ns=(stamp, stamp))
+    assert source.load_config("gain").config.k == 77.0
+
+
+def test_schemas_are_stored_once_and_again_once_removed():
+    from hydra.core.config_store import ConfigStore
+
+    cs = ConfigStore.instance()
+    register_schemas()
+    stored = cs.repo["schema"]["controller"]["hqp.yaml"]
+    register_schemas()
+    assert cs.repo["schema"]["controller"]["hqp.yaml"] is stored  # not converted again
+    hydra_adapter.unstore(cs, "schema/controller", "hqp")
+    register_schemas()
+    assert cs.repo["schema"]["controller"]["hqp.yaml"].node == stored.node
 
 
 # --------------------------------------------------------------------------- what it relies on
