@@ -26,12 +26,33 @@ _WARM_LAWS = (("hqp",), ("se3_lie", "impedance"))
 #: the lock file the compiling processes hold until the last one is done (set for xdist's workers)
 WARM_LOCK = "COMPLIANT_DOCKING_TESTS_KERNEL_LOCK"
 #: test files that build no controller: they run first, while the kernels compile (a file
-#: here that did build one would only compile a kernel a second time, not fail)
+#: here that did build one would only compile a kernel a second time, not fail). Each was
+#: run alone with an empty NUMBA_CACHE_DIR, which stayed empty.
 _NO_KERNEL = (
     "tests/config/test_defaults.py",
     "tests/config/test_hydra_adapter.py",
     "tests/config/test_presets.py",
     "tests/config/test_validate.py",
+    "tests/evaluation/test_contact.py",
+    "tests/evaluation/test_docking_time.py",
+    "tests/evaluation/test_map_boundaries.py",
+    "tests/evaluation/test_peg_in_hole.py",
+    "tests/planning/test_quintic.py",
+    "tests/planning/test_tracking.py",
+    "tests/planning/test_twophase.py",
+    "tests/results/test_compare.py",
+    "tests/results/test_convergence.py",
+    "tests/results/test_figure_bounds.py",
+    "tests/results/test_figures.py",
+    "tests/results/test_jamming_map.py",
+    "tests/results/test_stats.py",
+    "tests/run/test_figure_content.py",
+    "tests/sim/test_compliance_rig.py",
+    "tests/sim/test_conform.py",
+    "tests/sim/test_geometry.py",
+    "tests/sim/test_telemetry.py",
+    "tests/sweep/test_watchdog.py",
+    "tests/sweep/test_workers.py",
     "tests/test_layout.py",
     "tests/test_references.py",
     "tests/test_readme.py",
