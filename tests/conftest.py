@@ -164,6 +164,17 @@ def pytest_collection_modifyitems(config, items) -> None:
             item.add_marker(pytest.mark.xdist_group(group))
 
 
+@pytest.fixture(autouse=True)
+def _figures_closed():
+    """Every figure a test opened through pyplot is closed after it: the figure functions
+    that return a figure leave it to the caller (a notebook), and tests that inspect one
+    would otherwise pile them up in their worker (matplotlib warns past 20)."""
+    yield
+    pyplot = sys.modules.get("matplotlib.pyplot")
+    if pyplot is not None:
+        pyplot.close("all")
+
+
 _STOP_SIGNALS = ("SIGINT", "SIGTERM", "SIGHUP")
 
 
