@@ -76,8 +76,12 @@ def test_a_signal_stops_the_whole_sweep(tmp_path, moment, name):
     )
     out: list[str] = []
     err: list[str] = []
-    threading.Thread(target=lambda: out.extend(proc.stdout), daemon=True).start()
-    threading.Thread(target=lambda: err.extend(proc.stderr), daemon=True).start()
+    readers = [
+        threading.Thread(target=lambda: out.extend(proc.stdout), daemon=True),
+        threading.Thread(target=lambda: err.extend(proc.stderr), daemon=True),
+    ]
+    for reader in readers:
+        reader.start()
     deadline = time.monotonic() + 180
     while not any(MOMENTS[moment](line) for line in list(out)):
         assert proc.poll() is None, "".join(out)[-2000:] + "".join(err)[-2000:]
@@ -91,6 +95,9 @@ def test_a_signal_stops_the_whole_sweep(tmp_path, moment, name):
     proc.wait(timeout=120)
     at_exit = _job_dirs(sweep_dir)
     gone, alive = psutil.wait_procs(workers, timeout=5)
+    for reader, pipe in zip(readers, (proc.stdout, proc.stderr)):
+        reader.join(timeout=10)  # the pipes end with the processes that held them
+        pipe.close()
     text_out, text_err = "".join(out), "".join(err)
 
     assert proc.returncode == 128 + signum, text_out[-2000:] + text_err[-2000:]
