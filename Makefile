@@ -26,10 +26,17 @@ $(STAMP): pyproject.toml
 run: $(STAMP) gl
 	$(PY) -m compliant_docking $(ARGS)
 
+# The test targets write Python's bytecode cache (__pycache__, git-ignored, where numba keeps
+# the kernels too) even where the environment turns it off (PYTHONDONTWRITEBYTECODE=1, set by
+# many container images): without it each of the suite's processes (xdist workers, command
+# lines, sweep workers) compiles the package from source again, and each worker rewrites the
+# asserts of every test module again.
+TEST_ENV := PYTHONDONTWRITEBYTECODE=
+
 # the fast suite on every core (pytest-xdist); `make test XDIST=0` runs it in one process
 XDIST ?= auto
 test: $(STAMP) gl
-	$(PY) -m pytest -q -n $(XDIST) $(PYTEST_ARGS)
+	$(TEST_ENV) $(PY) -m pytest -q -n $(XDIST) $(PYTEST_ARGS)
 
 # ruff (lint and format), mypy and import-linter's layer contract, configured in
 # pyproject.toml; CI runs this before the tests
@@ -40,7 +47,7 @@ lint: $(STAMP)
 	$(VENV)/bin/lint-imports --no-cache --no-logo
 
 test-slow: $(STAMP) gl
-	$(PY) -m pytest -q -n $(XDIST) -m slow $(PYTEST_ARGS)
+	$(TEST_ENV) $(PY) -m pytest -q -n $(XDIST) -m slow $(PYTEST_ARGS)
 
 # the built wheel in a fresh virtualenv, run from outside the checkout (tests/test_package.py)
 test-wheel: $(STAMP)
@@ -48,7 +55,7 @@ test-wheel: $(STAMP)
 
 # everything: the fast suite, the slow simulations and sweeps, the wheel
 test-all: $(STAMP) gl
-	$(PY) -m pytest -q -n $(XDIST) -m 'slow or wheel or not slow' $(PYTEST_ARGS)
+	$(TEST_ENV) $(PY) -m pytest -q -n $(XDIST) -m 'slow or wheel or not slow' $(PYTEST_ARGS)
 
 # Offscreen rendering (render=video) without a display needs EGL (or OSMesa) from the
 # system, not from pip: check that one loads; if not, install Debian's EGL packages
