@@ -13,18 +13,25 @@ from pathlib import Path
 import pytest
 
 #: compile the laws' numba kernels (control/jit.py) by running a few steps of each law named
-#: on the command line, one after the other
+#: on the command line, one after the other; after the first law the process closes the file
+#: descriptor named by its first argument (-1: none), which releases the first law's lock
 _WARM = (
-    "import sys\n"
+    "import os, sys\n"
     "from compliant_docking.config import load_config\n"
     "from compliant_docking.sim.simulate import prepare\n"
-    "for law in sys.argv[1:]:\n"
+    "for i, law in enumerate(sys.argv[2:]):\n"
     "    prepare(load_config(f'controller={law}', 'task.duration=0.005', 'task.progress=false')).run()\n"
+    "    if i == 0 and int(sys.argv[1]) >= 0:\n"
+    "        os.close(int(sys.argv[1]))\n"
 )
-#: two processes, for two cores: hqp's kernels take longest to compile
-_WARM_LAWS = (("hqp",), ("se3_lie", "impedance"))
-#: the lock file the compiling processes hold until the last one is done (set for xdist's workers)
+#: two processes, for two cores: hqp's kernels take longest to compile; impedance's (the
+#: default controller's integral action, friction feed-forward and inertia floor) first in
+#: the other, so that the tests that need only those start after a few seconds
+_WARM_LAWS = (("hqp",), ("impedance", "se3_lie"))
+#: the lock files the compiling processes hold, set for xdist's workers: every kernel (until
+#: the last process is done), and impedance's (until the second process has compiled them)
 WARM_LOCK = "COMPLIANT_DOCKING_TESTS_KERNEL_LOCK"
+IMPEDANCE_LOCK = "COMPLIANT_DOCKING_TESTS_IMPEDANCE_KERNEL_LOCK"
 #: test files that build no controller: they run first, while the kernels compile (a file
 #: here that did build one would only compile a kernel a second time, not fail). Each was
 #: run alone with an empty NUMBA_CACHE_DIR, which stayed empty.
@@ -33,8 +40,10 @@ _NO_KERNEL = (
     "tests/config/test_hydra_adapter.py",
     "tests/config/test_presets.py",
     "tests/config/test_validate.py",
+    "tests/env/test_config.py",
     "tests/evaluation/test_contact.py",
     "tests/evaluation/test_docking_time.py",
+    "tests/evaluation/test_filtered_peak.py",
     "tests/evaluation/test_map_boundaries.py",
     "tests/evaluation/test_peg_in_hole.py",
     "tests/planning/test_quintic.py",
@@ -44,18 +53,45 @@ _NO_KERNEL = (
     "tests/results/test_convergence.py",
     "tests/results/test_figure_bounds.py",
     "tests/results/test_figures.py",
+    "tests/results/test_findings.py",
     "tests/results/test_jamming_map.py",
+    "tests/results/test_load_config.py",
+    "tests/results/test_peg_in_hole.py",
     "tests/results/test_stats.py",
     "tests/run/test_figure_content.py",
     "tests/sim/test_compliance_rig.py",
     "tests/sim/test_conform.py",
     "tests/sim/test_geometry.py",
+    "tests/sim/test_models.py",
     "tests/sim/test_telemetry.py",
+    "tests/sweep/test_progress.py",
     "tests/sweep/test_watchdog.py",
     "tests/sweep/test_workers.py",
+    "tests/test_cli.py",
     "tests/test_layout.py",
     "tests/test_references.py",
     "tests/test_readme.py",
+    "tests/tune/test_space.py",
+)
+#: test files whose runs (in the test's process, its command lines and its sweep workers)
+#: build impedance controllers only: they run next, once impedance's kernels are compiled,
+#: while hqp's still compile. Each was run alone with an empty NUMBA_CACHE_DIR, which then
+#: held impedance's kernels only (a file here that built another law would compile it a
+#: second time, not fail).
+_IMPEDANCE_ONLY = (
+    "tests/env/test_reward.py",
+    "tests/evaluation/test_docking.py",
+    "tests/planning/test_base.py",
+    "tests/planning/test_lead.py",
+    "tests/planning/test_se3topp.py",
+    "tests/sim/test_model_error.py",
+    "tests/sim/test_run_length.py",
+    "tests/sim/test_sensor.py",
+    "tests/sim/test_sensor_model.py",
+    "tests/sim/test_settings.py",
+    "tests/sim/test_task.py",
+    "tests/sweep/test_guard.py",
+    "tests/test_extras.py",
 )
 
 
@@ -67,33 +103,41 @@ def pytest_configure(config) -> None:
     each xdist worker, and each command-line run and sweep worker the tests start (20-75 s
     for hqp on a shared 2-core machine). Here the kernels compile in two processes that
     start before the workers; the workers collect meanwhile and run the tests that build no
-    controller (:data:`_NO_KERNEL`, ordered first), and every other test waits until the
-    compiling processes have exited (:func:`pytest_runtest_setup`), then loads the cache. Only
-    for a distributed run (``-n``): a single targeted test pays nothing when the cache is warm.
+    controller (:data:`_NO_KERNEL`, ordered first), then those that build impedance
+    controllers only (:data:`_IMPEDANCE_ONLY`, next) once impedance's kernels are compiled,
+    and every other test waits until the compiling processes have exited
+    (:func:`pytest_runtest_setup`), then loads the cache. Only for a distributed run
+    (``-n``): a single targeted test pays nothing when the cache is warm.
     """
     if hasattr(config, "workerinput") or config.getoption("collectonly", False):
         return  # an xdist worker (the controller did it), or nothing will run
     if not config.getoption("numprocesses", None):
         return
-    handle, lock = tempfile.mkstemp(prefix="compliant-docking-kernels-", suffix=".lock")
-    fcntl.flock(handle, fcntl.LOCK_EX)  # held by the children's copies until the last exits
+    locks = {}
+    for name in (WARM_LOCK, IMPEDANCE_LOCK):
+        handle, path = tempfile.mkstemp(prefix="compliant-docking-kernels-", suffix=".lock")
+        fcntl.flock(handle, fcntl.LOCK_EX)  # held by the children's copies until they close them
+        locks[name] = (handle, path)
+    every, first = locks[WARM_LOCK][0], locks[IMPEDANCE_LOCK][0]
     procs = []
     for laws in _WARM_LAWS:
         log = tempfile.TemporaryFile()
+        releases = first if laws[0] == "impedance" else -1
         procs.append(
             (
                 subprocess.Popen(
-                    [sys.executable, "-c", _WARM, *laws],
+                    [sys.executable, "-c", _WARM, str(releases), *laws],
                     stdout=subprocess.DEVNULL,
                     stderr=log,
-                    pass_fds=(handle,),
+                    pass_fds=(every, first) if releases >= 0 else (every,),
                 ),
                 log,
             )
         )
-    os.close(handle)
-    os.environ[WARM_LOCK] = lock  # the workers start after this hook and inherit it
-    config.stash[_warm_key] = (lock, procs)
+    for name, (handle, path) in locks.items():
+        os.close(handle)
+        os.environ[name] = path  # the workers start after this hook and inherit it
+    config.stash[_warm_key] = ([path for _, path in locks.values()], procs)
 
 
 _warm_key = pytest.StashKey[tuple]()
@@ -103,7 +147,7 @@ def pytest_unconfigure(config) -> None:
     """Reap the compiling processes; say why one failed (the tests of that law report it)."""
     if _warm_key not in config.stash:
         return
-    lock, procs = config.stash[_warm_key]
+    paths, procs = config.stash[_warm_key]
     for proc, log in procs:
         if proc.wait() != 0:
             log.seek(0)
@@ -111,16 +155,21 @@ def pytest_unconfigure(config) -> None:
                 f"compiling the kernels before the tests failed:\n{log.read().decode()[-2000:]}\n"
             )
         log.close()
-    os.environ.pop(WARM_LOCK, None)
-    Path(lock).unlink(missing_ok=True)
+    for name, path in zip((WARM_LOCK, IMPEDANCE_LOCK), paths):
+        os.environ.pop(name, None)
+        Path(path).unlink(missing_ok=True)
 
 
 @pytest.hookimpl(tryfirst=True)
 def pytest_runtest_setup(item) -> None:
     """A test that may build a controller waits for the compiling processes before any of
-    its fixtures (a module's sweep) is set up; once they are done the lock is free at once."""
-    lock = os.environ.get(WARM_LOCK)
-    if lock and not item.nodeid.startswith(_NO_KERNEL):
+    its fixtures (a module's sweep) is set up: a test of :data:`_IMPEDANCE_ONLY` until
+    impedance's kernels are compiled, any other until every kernel is; once they are done
+    the lock is free at once."""
+    if item.nodeid.startswith(_NO_KERNEL):
+        return
+    lock = os.environ.get(IMPEDANCE_LOCK if item.nodeid.startswith(_IMPEDANCE_ONLY) else WARM_LOCK)
+    if lock:
         try:
             handle = os.open(lock, os.O_RDONLY)
         except FileNotFoundError:  # the session is over
@@ -153,7 +202,12 @@ def pytest_collection_modifyitems(config, items) -> None:
     a module-scoped one). First among the hooks: an xdist worker's own hook reads the groups
     (it suffixes each grouped test's id with its group) and runs before this one otherwise,
     as conftest files register before the worker's plugin, so no test was ever grouped."""
-    items.sort(key=lambda item: not item.nodeid.startswith(_NO_KERNEL))  # stable: run while compiling
+    # stable: the tests that need no kernel first, then those that need impedance's only
+    items.sort(
+        key=lambda item: (
+            0 if item.nodeid.startswith(_NO_KERNEL) else 1 if item.nodeid.startswith(_IMPEDANCE_ONLY) else 2
+        )
+    )
     for item in items:
         used = getattr(item, "fixturenames", ())
         group = next((name for name in SESSION_FIXTURES if name in used), None)
