@@ -13,25 +13,18 @@ from pathlib import Path
 import pytest
 
 #: compile the laws' numba kernels (control/jit.py) by running a few steps of each law named
-#: on the command line, one after the other; after the first law the process closes the file
-#: descriptor named by its first argument (-1: none), which releases the first law's lock
+#: on the command line, one after the other
 _WARM = (
-    "import os, sys\n"
+    "import sys\n"
     "from compliant_docking.config import load_config\n"
     "from compliant_docking.sim.simulate import prepare\n"
-    "for i, law in enumerate(sys.argv[2:]):\n"
+    "for law in sys.argv[1:]:\n"
     "    prepare(load_config(f'controller={law}', 'task.duration=0.005', 'task.progress=false')).run()\n"
-    "    if i == 0 and int(sys.argv[1]) >= 0:\n"
-    "        os.close(int(sys.argv[1]))\n"
 )
-#: two processes, for two cores: hqp's kernels take longest to compile; impedance's (the
-#: default controller's integral action, friction feed-forward and inertia floor) first in
-#: the other, so that the tests that need only those start after a few seconds
-_WARM_LAWS = (("hqp",), ("impedance", "se3_lie"))
-#: the lock files the compiling processes hold, set for xdist's workers: every kernel (until
-#: the last process is done), and impedance's (until the second process has compiled them)
+#: two processes, for two cores: hqp's kernels take longest to compile
+_WARM_LAWS = (("hqp",), ("se3_lie", "impedance"))
+#: the lock file the compiling processes hold until the last one is done (set for xdist's workers)
 WARM_LOCK = "COMPLIANT_DOCKING_TESTS_KERNEL_LOCK"
-IMPEDANCE_LOCK = "COMPLIANT_DOCKING_TESTS_IMPEDANCE_KERNEL_LOCK"
 #: test files that build no controller: they run first, while the kernels compile (a file
 #: here that did build one would only compile a kernel a second time, not fail). Each was
 #: run alone with an empty NUMBA_CACHE_DIR, which stayed empty.
@@ -73,26 +66,6 @@ _NO_KERNEL = (
     "tests/test_readme.py",
     "tests/tune/test_space.py",
 )
-#: test files whose runs (in the test's process, its command lines and its sweep workers)
-#: build impedance controllers only: they run next, once impedance's kernels are compiled,
-#: while hqp's still compile. Each was run alone with an empty NUMBA_CACHE_DIR, which then
-#: held impedance's kernels only (a file here that built another law would compile it a
-#: second time, not fail).
-_IMPEDANCE_ONLY = (
-    "tests/env/test_reward.py",
-    "tests/evaluation/test_docking.py",
-    "tests/planning/test_base.py",
-    "tests/planning/test_lead.py",
-    "tests/planning/test_se3topp.py",
-    "tests/sim/test_model_error.py",
-    "tests/sim/test_run_length.py",
-    "tests/sim/test_sensor.py",
-    "tests/sim/test_sensor_model.py",
-    "tests/sim/test_settings.py",
-    "tests/sim/test_task.py",
-    "tests/sweep/test_guard.py",
-    "tests/test_extras.py",
-)
 
 
 def pytest_configure(config) -> None:
@@ -103,41 +76,33 @@ def pytest_configure(config) -> None:
     each xdist worker, and each command-line run and sweep worker the tests start (20-75 s
     for hqp on a shared 2-core machine). Here the kernels compile in two processes that
     start before the workers; the workers collect meanwhile and run the tests that build no
-    controller (:data:`_NO_KERNEL`, ordered first), then those that build impedance
-    controllers only (:data:`_IMPEDANCE_ONLY`, next) once impedance's kernels are compiled,
-    and every other test waits until the compiling processes have exited
-    (:func:`pytest_runtest_setup`), then loads the cache. Only for a distributed run
-    (``-n``): a single targeted test pays nothing when the cache is warm.
+    controller (:data:`_NO_KERNEL`, ordered first), and every other test waits until the
+    compiling processes have exited (:func:`pytest_runtest_setup`), then loads the cache. Only
+    for a distributed run (``-n``): a single targeted test pays nothing when the cache is warm.
     """
     if hasattr(config, "workerinput") or config.getoption("collectonly", False):
         return  # an xdist worker (the controller did it), or nothing will run
     if not config.getoption("numprocesses", None):
         return
-    locks = {}
-    for name in (WARM_LOCK, IMPEDANCE_LOCK):
-        handle, path = tempfile.mkstemp(prefix="compliant-docking-kernels-", suffix=".lock")
-        fcntl.flock(handle, fcntl.LOCK_EX)  # held by the children's copies until they close them
-        locks[name] = (handle, path)
-    every, first = locks[WARM_LOCK][0], locks[IMPEDANCE_LOCK][0]
+    handle, lock = tempfile.mkstemp(prefix="compliant-docking-kernels-", suffix=".lock")
+    fcntl.flock(handle, fcntl.LOCK_EX)  # held by the children's copies until the last exits
     procs = []
     for laws in _WARM_LAWS:
         log = tempfile.TemporaryFile()
-        releases = first if laws[0] == "impedance" else -1
         procs.append(
             (
                 subprocess.Popen(
-                    [sys.executable, "-c", _WARM, str(releases), *laws],
+                    [sys.executable, "-c", _WARM, *laws],
                     stdout=subprocess.DEVNULL,
                     stderr=log,
-                    pass_fds=(every, first) if releases >= 0 else (every,),
+                    pass_fds=(handle,),
                 ),
                 log,
             )
         )
-    for name, (handle, path) in locks.items():
-        os.close(handle)
-        os.environ[name] = path  # the workers start after this hook and inherit it
-    config.stash[_warm_key] = ([path for _, path in locks.values()], procs)
+    os.close(handle)
+    os.environ[WARM_LOCK] = lock  # the workers start after this hook and inherit it
+    config.stash[_warm_key] = (lock, procs)
 
 
 _warm_key = pytest.StashKey[tuple]()
@@ -147,7 +112,7 @@ def pytest_unconfigure(config) -> None:
     """Reap the compiling processes; say why one failed (the tests of that law report it)."""
     if _warm_key not in config.stash:
         return
-    paths, procs = config.stash[_warm_key]
+    lock, procs = config.stash[_warm_key]
     for proc, log in procs:
         if proc.wait() != 0:
             log.seek(0)
@@ -155,21 +120,16 @@ def pytest_unconfigure(config) -> None:
                 f"compiling the kernels before the tests failed:\n{log.read().decode()[-2000:]}\n"
             )
         log.close()
-    for name, path in zip((WARM_LOCK, IMPEDANCE_LOCK), paths):
-        os.environ.pop(name, None)
-        Path(path).unlink(missing_ok=True)
+    os.environ.pop(WARM_LOCK, None)
+    Path(lock).unlink(missing_ok=True)
 
 
 @pytest.hookimpl(tryfirst=True)
 def pytest_runtest_setup(item) -> None:
     """A test that may build a controller waits for the compiling processes before any of
-    its fixtures (a module's sweep) is set up: a test of :data:`_IMPEDANCE_ONLY` until
-    impedance's kernels are compiled, any other until every kernel is; once they are done
-    the lock is free at once."""
-    if item.nodeid.startswith(_NO_KERNEL):
-        return
-    lock = os.environ.get(IMPEDANCE_LOCK if item.nodeid.startswith(_IMPEDANCE_ONLY) else WARM_LOCK)
-    if lock:
+    its fixtures (a module's sweep) is set up; once they are done the lock is free at once."""
+    lock = os.environ.get(WARM_LOCK)
+    if lock and not item.nodeid.startswith(_NO_KERNEL):
         try:
             handle = os.open(lock, os.O_RDONLY)
         except FileNotFoundError:  # the session is over
@@ -202,12 +162,7 @@ def pytest_collection_modifyitems(config, items) -> None:
     a module-scoped one). First among the hooks: an xdist worker's own hook reads the groups
     (it suffixes each grouped test's id with its group) and runs before this one otherwise,
     as conftest files register before the worker's plugin, so no test was ever grouped."""
-    # stable: the tests that need no kernel first, then those that need impedance's only
-    items.sort(
-        key=lambda item: (
-            0 if item.nodeid.startswith(_NO_KERNEL) else 1 if item.nodeid.startswith(_IMPEDANCE_ONLY) else 2
-        )
-    )
+    items.sort(key=lambda item: not item.nodeid.startswith(_NO_KERNEL))  # stable: run while compiling
     for item in items:
         used = getattr(item, "fixturenames", ())
         group = next((name for name in SESSION_FIXTURES if name in used), None)
