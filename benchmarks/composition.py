@@ -40,6 +40,7 @@ CHOICES = [
 
 
 def _time(overrides: tuple[str, ...]) -> float:
+    # load_config's steps, not load_config itself: it would install the memos again
     start = time.perf_counter()
     register_schemas()
     GlobalHydra.instance().clear()

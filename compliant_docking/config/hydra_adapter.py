@@ -9,9 +9,9 @@ what changed — Hydra is pinned below 1.4 in pyproject.toml for them):
 1. **The composition memos** (:func:`install`): four functions of ``hydra._internal``
    wrapped, ``config_loader_impl.create_defaults_list``,
    ``ConfigLoaderImpl._compose_config_from_defaults_list``,
-   ``CachingConfigRepository.__init__`` and ``FileConfigSource.load_config`` (the class
-   ``SourcesRegistry`` resolves: Hydra's plugin scan loads its module anew). Hydra
-   offers no hook into its composition.
+   ``CachingConfigRepository.__init__`` and ``FileConfigSource.load_config`` (wrapped at
+   the first composition: see :func:`_memoize_file_sources`). Hydra offers no hook into
+   its composition.
 2. **The compositions a sweep's check made, reused** (:func:`share_compositions`): the
    basic sweeper composes every job once in the launching process to check it
    (``validate_batch_is_legal``, through its config loader's ``load_sweep_config``); the
@@ -24,9 +24,7 @@ what changed — Hydra is pinned below 1.4 in pyproject.toml for them):
    the store offers no method to delete from; a plugin's presets that our config files
    of the same names replace (sweep/launchers.py).
 
-What follows is the memo of item 1.
-
-A sweep composes each job's config twice — in the launching process, where Hydra's
+**The memos of item 1.** A sweep composes each job's config twice — in the launching process, where Hydra's
 sweeper checks every job before any starts, and in the worker that runs it — and a
 single run composes twice too (Hydra first composes to read ``hydra.mode``). Each
 composition parses the YAML files, builds the defaults tree and merges some 30 nodes
@@ -42,29 +40,25 @@ keeping what Hydra computed and handing out a deep copy, so no caller shares a n
   ``hydra.mode`` and for a sweep's master config;
 - the **merged config before the value overrides**, keyed by that defaults list.
 
-Under both, a third memo keeps every **config file** as parsed, keyed by its path and
-its text: Hydra reads and parses the YAML of each file of a config group again at every
-composition (its own cache lives for one composition): ~5 ms a file, ~35 files a
-composition, about a quarter of what a composition that misses the two memos above
-costs. A hit hands out a copy unpickled from the parsed file (a file's config is plain
-YAML: no typed node that pickling could change), ~20 times cheaper than parsing it
-again; an edited file has another text, so it is parsed again.
+A third memo keeps every **config file** as parsed, keyed by its path and text: Hydra
+parses each file again at every composition (~5 ms a file, ~35 a composition: a quarter
+of a composition that misses the memos above). A hit is unpickled from the parsed file
+(plain YAML: no typed node that pickling could change), ~20 times cheaper; an edited
+file has another text, so it is parsed again.
 
-Both keys of the first two memos hold a stamp of each config directory (newest
+The keys of the first two memos hold a stamp of each config directory (newest
 modification time, number of files), so an edited YAML file is read again. The typed
 schemas (the ConfigStore) are code and are taken as fixed within a process
-(:func:`clear` forgets everything). All
-that follows — the value overrides, Hydra's own ``hydra`` node (overrides, choices,
-output directory) — runs as before, for every job. Also, Hydra deep-copies its config
-repository for every composition, which copies the whole ConfigStore (~9 ms); a shallow
-copy does the same job (see :func:`_shallow_repository`).
+(:func:`clear` forgets everything). All that follows — the value overrides, Hydra's own
+``hydra`` node (overrides, choices, output directory) — runs as before, for every job.
+Also, Hydra deep-copies its config repository for every composition, which copies the
+whole ConfigStore (~9 ms); a shallow copy does the same job (:func:`_shallow_repository`).
 
 The composed configs equal Hydra's own, nodes, types and flags alike, in both run
 modes, and a wrong override is refused with the same error
-(tests/config/test_hydra_adapter.py). A composition that hits both memos takes ~15 ms of
-CPU instead of ~150 ms. Through Hydra's compose API as ``load_config`` calls it
-(benchmarks/composition.py): ~30 ms instead of ~470 ms, and ~350 ms for a choice of
-config groups not composed before, whose files are parsed already.
+(tests/config/test_hydra_adapter.py). Through Hydra's compose API as ``load_config``
+calls it (benchmarks/composition.py), a composition that hits both memos takes ~30 ms
+instead of ~470 ms, and one of config groups not chosen before ~350 ms.
 """
 
 from __future__ import annotations
@@ -160,16 +154,10 @@ def install() -> None:
         from hydra._internal import config_loader_impl
         from hydra._internal.config_loader_impl import ConfigLoaderImpl
         from hydra._internal.config_repository import CachingConfigRepository
-        from hydra._internal.sources_registry import SourcesRegistry
-        from hydra.core.plugins import Plugins
-
-        Plugins.instance()  # its scan registers the config sources (and loads their modules anew)
-        file_source = SourcesRegistry.instance().resolve("file")  # the class Hydra instantiates
 
         _patch(config_loader_impl, "create_defaults_list", _defaults_list)
         _patch(ConfigLoaderImpl, "_compose_config_from_defaults_list", _compose)
         _patch(CachingConfigRepository, "__init__", _shallow_repository)
-        _patch(file_source, "load_config", _parsed_file)
     except (ImportError, AttributeError) as exc:
         uninstall()
         raise RuntimeError(_changed(f"{exc}")) from None
@@ -192,8 +180,20 @@ def _shallow_repository(original):
         # sources to new ones, so a shallow copy leaves the original untouched just as well.
         self.delegate = copy.copy(delegate)
         self.cache = {}
+        _memoize_file_sources(delegate)
 
     return __init__
+
+
+def _memoize_file_sources(repo) -> None:
+    """Wrap ``load_config`` of the class of ``repo``'s file sources with the file memo, once
+    per class: the class Hydra instantiates, which its plugin scan loaded anew (``import``
+    gives another class). At a composition's start, so an import of the command line (in
+    every sweep worker) scans no plugins."""
+    for source in repo.get_sources():
+        kind = type(source)
+        if source.scheme() == "file" and not any(o is kind and n == "load_config" for o, n, _ in _originals):
+            _patch(kind, "load_config", _parsed_file)
 
 
 def _parsed_file(original):
@@ -404,7 +404,7 @@ def problems() -> list[str]:
         ("self", "config_path"),
         memo,
     )
-    signature("hydra._internal.sources_registry:SourcesRegistry", "resolve", ("self", "scheme"), memo)
+    signature("hydra._internal.config_repository:ConfigRepository", "get_sources", ("self",), memo)
     signature(
         f"{loader}:ConfigLoaderImpl",
         "load_sweep_config",

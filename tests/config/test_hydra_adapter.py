@@ -118,13 +118,16 @@ def test_a_file_edited_to_the_same_size_and_time_is_parsed_again(tmp_path):
     from hydra._internal.sources_registry import SourcesRegistry
 
     hydra_adapter.install()
+    compose_all([()])  # a composition wraps the class of Hydra's file sources
     source = SourcesRegistry.instance().resolve("file")("test", f"file://{tmp_path}")
     path = tmp_path / "gain.yaml"
     path.write_text("k: 50.0\n")
     stamp = os.stat(path).st_mtime_ns
     first = source.load_config("gain")
     first.config.k = 1.0  # a caller that changes what it got changes no later copy
+    hits = hydra_adapter.stats["files"][0]
     assert source.load_config("gain").config.k == 50.0
+    assert hydra_adapter.stats["files"][0] == hits + 1  # served by the memo
     path.write_text("k: 77.0\n")
     os.utime(path, ns=(stamp, stamp))
     assert source.load_config("gain").config.k == 77.0
